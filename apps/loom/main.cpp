@@ -1,0 +1,310 @@
+// loom: command-line front end. Usage and input errors exit 2 with one clear message;
+// internal errors exit 1.
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/graph/Renderer.h"
+#include "core/util/Log.h"
+
+using namespace loom;
+
+namespace {
+
+struct UsageError : UserError {
+    using UserError::UserError;
+};
+
+const char* kMainHelp = R"(loom - research rendering framework (render graphs on Vulkan compute)
+
+usage: loom <command> [options]
+
+commands:
+  render GRAPH     render frames of a graph and write images
+  validate GRAPH   check graph files without rendering
+  passes           list every pass type with ports and parameters
+  devices          list Vulkan devices
+
+'loom <command> --help' describes each command.
+)";
+
+const char* kRenderHelp = R"(usage: loom render GRAPH [options]
+
+  --width W, --height H     frame size (default 256 x 256)
+  --frames N                frames to render (default 1)
+  --seed K                  random seed (default 0); same seed, same image
+  --device D                device index or name (default: LOOM_DEVICE, else lavapipe)
+  --out FILE                write the first marked output (.exr/.hdr/.png/.jpg)
+  --output PASS.PORT=FILE   write a marked output (repeatable)
+  --set PASS.PARAM=VALUE    set a parameter; VALUE is JSON (1.5, true, [1,2]) or a string
+  --check-nan               fail if any float output holds NaN or Inf
+  --timings                 print per-pass GPU times averaged over the frames
+  --validation              enable Vulkan validation layers
+  --quiet                   print only errors
+
+Without --out/--output the first marked output goes to out/<graph name>.png.
+)";
+
+const char* kValidateHelp = R"(usage: loom validate GRAPH [GRAPH ...]
+
+Loads each graph, checks passes, parameters, edges, formats, cycles and outputs, and compiles
+it (cull, order, allocate) at 256x256 without a GPU. Prints OK or the first error per file.
+)";
+
+const char* kPassesHelp = R"(usage: loom passes [--json]
+
+Lists every registered pass type with its ports and parameters (type, default, range, doc).
+)";
+
+const char* kDevicesHelp = R"(usage: loom devices
+
+Lists the Vulkan devices; pick one with --device INDEX|NAME or LOOM_DEVICE.
+)";
+
+bool isHelp(const std::string& a) { return a == "--help" || a == "-h"; }
+
+uint32_t parseUint(const std::string& opt, const std::string& v) {
+    try {
+        size_t pos = 0;
+        long long x = std::stoll(v, &pos);
+        if (pos != v.size() || x < 0 || x > 0xffffffffll) throw std::invalid_argument("");
+        return uint32_t(x);
+    } catch (const std::exception&) {
+        throw UsageError(opt + " expects a non-negative integer, got '" + v + "'");
+    }
+}
+
+json parseValue(const std::string& v) {
+    try {
+        return json::parse(v);
+    } catch (const json::parse_error&) {
+        return json(v);  // bare words are strings: --set tm.operator=reinhard
+    }
+}
+
+std::pair<std::string, std::string> splitAssign(const std::string& opt, const std::string& s) {
+    auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0)
+        throw UsageError(opt + " expects NAME=VALUE, got '" + s + "'");
+    return {s.substr(0, eq), s.substr(eq + 1)};
+}
+
+int cmdRender(const std::vector<std::string>& args) {
+    Renderer::Options o;
+    uint32_t frames = 1;
+    std::string out;
+    std::vector<std::pair<std::string, std::string>> outputs, sets;
+    bool checkNan = false, timings = false;
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= args.size()) throw UsageError(a + " needs a value");
+            return args[++i];
+        };
+        if (isHelp(a)) {
+            std::cout << kRenderHelp;
+            return 0;
+        } else if (a == "--width") o.width = parseUint(a, next());
+        else if (a == "--height") o.height = parseUint(a, next());
+        else if (a == "--frames") frames = parseUint(a, next());
+        else if (a == "--seed") o.seed = parseUint(a, next());
+        else if (a == "--device") o.device = next();
+        else if (a == "--out") out = next();
+        else if (a == "--output") outputs.push_back(splitAssign(a, next()));
+        else if (a == "--set") sets.push_back(splitAssign(a, next()));
+        else if (a == "--check-nan") checkNan = true;
+        else if (a == "--timings") timings = true;
+        else if (a == "--validation") o.validation = true;
+        else if (a == "--quiet") setLogLevel(LogLevel::Error);
+        else if (a.rfind("--", 0) == 0) throw UsageError("render: unknown option '" + a + "' (see loom render --help)");
+        else if (o.graph.empty()) o.graph = a;
+        else throw UsageError("render: unexpected argument '" + a + "'");
+    }
+    if (o.graph.empty()) throw UsageError("render: missing GRAPH (see loom render --help)");
+    if (o.width == 0 || o.height == 0 || o.width > 16384 || o.height > 16384)
+        throw UsageError("render: --width/--height must be in 1..16384");
+    if (frames == 0) throw UsageError("render: --frames must be at least 1");
+
+    Renderer r(o);
+    for (auto& [k, v] : sets) r.graph().setParam(k, parseValue(v));
+    logInfo("device: {}", r.gpu().deviceInfo().name);
+    std::map<std::string, double> passMs;
+    auto start = std::chrono::steady_clock::now();
+    for (uint32_t f = 0; f < frames; ++f) {
+        r.frame();
+        for (auto& t : r.graph().timings()) passMs[t.pass] += t.gpuMs;
+    }
+    double wallMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (checkNan) r.checkNaN();
+
+    if (outputs.empty()) {
+        std::string port = r.graph().outputs().front();
+        if (out.empty()) out = "out/" + r.graph().name() + ".png";
+        outputs.push_back({port, out});
+    } else if (!out.empty()) {
+        outputs.insert(outputs.begin(), {r.graph().outputs().front(), out});
+    }
+    for (auto& [port, file] : outputs) {
+        writeImage(file, r.readOutput(port));
+        std::printf("wrote %s (%s, %ux%u, %u frame%s)\n", file.c_str(), port.c_str(), o.width,
+                    o.height, frames, frames == 1 ? "" : "s");
+    }
+    if (timings) {
+        std::printf("%-24s %10s\n", "pass", "GPU ms");
+        double total = 0;
+        for (auto& t : r.graph().timings()) {
+            std::printf("%-24s %10.3f\n", t.pass.c_str(), passMs[t.pass] / frames);
+            total += passMs[t.pass] / frames;
+        }
+        std::printf("%-24s %10.3f\n%-24s %10.3f\n", "total (GPU)", total, "frame (wall)",
+                    wallMs / frames);
+    }
+    for (auto& p : r.graph().passes())
+        for (auto& [k, v] : p->stats()) logInfo("{}.{} = {}", p->name(), k, v);
+    return 0;
+}
+
+int cmdValidate(const std::vector<std::string>& args) {
+    std::vector<std::string> files;
+    for (auto& a : args) {
+        if (isHelp(a)) {
+            std::cout << kValidateHelp;
+            return 0;
+        }
+        if (a.rfind("--", 0) == 0) throw UsageError("validate: unknown option '" + a + "'");
+        files.push_back(a);
+    }
+    if (files.empty()) throw UsageError("validate: missing GRAPH (see loom validate --help)");
+    int failures = 0;
+    for (auto& f : files) {
+        try {
+            auto g = RenderGraph::load(f);
+            auto cg = g->compile(256, 256);
+            std::printf("OK %s (%zu passes, %zu culled)\n", f.c_str(), cg.order.size(),
+                        cg.culled.size());
+        } catch (const UserError& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            ++failures;
+        }
+    }
+    return failures ? 2 : 0;
+}
+
+json passesJson() {
+    json all = json::array();
+    for (auto& type : PassRegistry::instance().types()) {
+        auto pass = PassRegistry::instance().create(type, "p");
+        PassReflection r = pass->reflection();
+        json j{{"type", type}, {"doc", PassRegistry::instance().find(type)->doc}};
+        j["inputs"] = json::array();
+        j["outputs"] = json::array();
+        for (auto& p : r.ports()) {
+            json pj{{"name", p.name},
+                    {"kind", p.kind == ResourceKind::Texture ? "texture" : "buffer"},
+                    {"optional", p.optional},
+                    {"doc", p.doc}};
+            if (p.kind == ResourceKind::Texture)
+                pj["format"] = p.format ? gpu::formatName(*p.format) : "any";
+            j[p.isInput ? "inputs" : "outputs"].push_back(pj);
+        }
+        j["params"] = json::array();
+        for (auto& p : r.params()) {
+            json pj{{"name", p.name},
+                    {"type", paramTypeName(p.type)},
+                    {"default", p.defaultValue},
+                    {"doc", p.doc}};
+            if (p.min) pj["min"] = *p.min;
+            if (p.max) pj["max"] = *p.max;
+            if (!p.choices.empty()) pj["choices"] = p.choices;
+            j["params"].push_back(pj);
+        }
+        j["persistent"] = json::array();
+        for (auto& p : r.persistent()) j["persistent"].push_back({{"name", p.name}, {"doc", p.doc}});
+        all.push_back(j);
+    }
+    return all;
+}
+
+int cmdPasses(const std::vector<std::string>& args) {
+    bool asJson = false;
+    for (auto& a : args) {
+        if (isHelp(a)) {
+            std::cout << kPassesHelp;
+            return 0;
+        }
+        if (a == "--json") asJson = true;
+        else throw UsageError("passes: unknown option '" + a + "'");
+    }
+    json all = passesJson();
+    if (asJson) {
+        std::cout << all.dump(2) << "\n";
+        return 0;
+    }
+    for (auto& p : all) {
+        std::cout << p["type"].get<std::string>() << " - " << p["doc"].get<std::string>() << "\n";
+        for (const char* dir : {"inputs", "outputs"})
+            for (auto& port : p[dir])
+                std::cout << "  " << (dir[0] == 'i' ? "in  " : "out ")
+                          << port["name"].get<std::string>() << " : "
+                          << port["kind"].get<std::string>()
+                          << (port.contains("format") ? " " + port["format"].get<std::string>() : "")
+                          << (port["optional"].get<bool>() ? " (optional)" : "") << "  "
+                          << port["doc"].get<std::string>() << "\n";
+        for (auto& param : p["params"]) {
+            std::cout << "  param " << param["name"].get<std::string>() << " : "
+                      << param["type"].get<std::string>() << " = " << param["default"].dump();
+            if (param.contains("min") || param.contains("max"))
+                std::cout << " in [" << (param.contains("min") ? param["min"].dump() : "-inf")
+                          << ", " << (param.contains("max") ? param["max"].dump() : "inf") << "]";
+            if (param.contains("choices")) std::cout << " of " << param["choices"].dump();
+            std::cout << "  " << param["doc"].get<std::string>() << "\n";
+        }
+    }
+    return 0;
+}
+
+int cmdDevices(const std::vector<std::string>& args) {
+    for (auto& a : args) {
+        if (isHelp(a)) {
+            std::cout << kDevicesHelp;
+            return 0;
+        }
+        throw UsageError("devices: unknown option '" + a + "'");
+    }
+    for (auto& d : gpu::Context::listDevices())
+        std::printf("%u: %s (%s, Vulkan %u.%u, %s)\n", d.index, d.name.c_str(), d.type.c_str(),
+                    VK_API_VERSION_MAJOR(d.apiVersion), VK_API_VERSION_MINOR(d.apiVersion),
+                    d.driver.c_str());
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.empty() || isHelp(args[0])) {
+        std::cout << kMainHelp;
+        return args.empty() ? 2 : 0;
+    }
+    std::string cmd = args[0];
+    args.erase(args.begin());
+    try {
+        if (cmd == "render") return cmdRender(args);
+        if (cmd == "validate") return cmdValidate(args);
+        if (cmd == "passes") return cmdPasses(args);
+        if (cmd == "devices") return cmdDevices(args);
+        throw UsageError("unknown command '" + cmd + "' (commands: render, validate, passes, devices)");
+    } catch (const UserError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "internal error: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,780 @@
+#include "core/graph/RenderGraph.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "core/util/Hash.h"
+#include "core/util/Log.h"
+
+namespace loom {
+
+namespace {
+
+// "node.port" -> {node, port}; "node" -> {node, ""}.
+std::pair<std::string, std::string> splitPort(const std::string& s) {
+    auto dot = s.find('.');
+    if (dot == std::string::npos) return {s, ""};
+    return {s.substr(0, dot), s.substr(dot + 1)};
+}
+
+std::string joinNames(const std::vector<std::string>& names, const char* sep = ", ") {
+    std::string out;
+    for (auto& n : names) out += (out.empty() ? "" : sep) + n;
+    return out;
+}
+
+std::string portList(const PassReflection& r, bool inputs) {
+    std::vector<std::string> names;
+    for (auto& p : r.ports())
+        if (p.isInput == inputs) names.push_back(p.name);
+    return names.empty() ? "(none)" : joinNames(names);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// ExecuteContext
+
+std::shared_ptr<gpu::Image> ExecuteContext::texture(const std::string& port) const {
+    auto it = mTextures.find(port);
+    return it == mTextures.end() ? nullptr : it->second;
+}
+std::shared_ptr<gpu::Buffer> ExecuteContext::buffer(const std::string& port) const {
+    auto it = mBuffers.find(port);
+    return it == mBuffers.end() ? nullptr : it->second;
+}
+std::shared_ptr<gpu::Image> ExecuteContext::persistentTexture(const std::string& name) const {
+    return texture("#" + name);
+}
+std::shared_ptr<gpu::Buffer> ExecuteContext::persistentBuffer(const std::string& name) const {
+    return buffer("#" + name);
+}
+bool ExecuteContext::has(const std::string& port) const {
+    return mTextures.count(port) || mBuffers.count(port);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Loading and saving
+
+std::string RenderGraph::where(const std::string& pointer) const {
+    if (mSource) return mSource->where(pointer);
+    return mSourceFile.empty() ? "graph '" + mName + "'" : mSourceFile;
+}
+
+std::string RenderGraph::sourceDir() const {
+    if (mSourceFile.empty()) return std::filesystem::current_path().string();
+    return std::filesystem::absolute(mSourceFile).parent_path().string();
+}
+
+std::unique_ptr<RenderGraph> RenderGraph::load(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw GraphError(path + ": cannot open graph file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse(ss.str(), path);
+}
+
+std::unique_ptr<RenderGraph> RenderGraph::parse(const std::string& text,
+                                                const std::string& filename) {
+    auto g = std::make_unique<RenderGraph>();
+    g->mSourceFile = filename;
+    g->mSource = std::make_shared<JsonSource>(JsonSource::parse(text, filename));
+    const json& root = g->mSource->root();
+    auto fail = [&](const std::string& ptr, const std::string& msg) {
+        return GraphError(g->where(ptr) + ": " + msg);
+    };
+    if (!root.is_object()) throw fail("", "a graph must be a JSON object");
+    for (auto& [key, v] : root.items())
+        if (key != "name" && key != "passes" && key != "edges" && key != "outputs" &&
+            key != "description")
+            throw fail("/" + key, "unknown graph field '" + key +
+                                      "'; valid fields: name, description, passes, edges, outputs");
+    if (root.contains("name")) {
+        if (!root["name"].is_string()) throw fail("/name", "'name' must be a string");
+        g->mName = root["name"];
+    }
+    if (!root.contains("passes") || !root["passes"].is_array())
+        throw fail("/passes", "a graph needs a 'passes' array");
+
+    // Passes.
+    const json& passes = root["passes"];
+    for (size_t i = 0; i < passes.size(); ++i) {
+        std::string ptr = "/passes/" + std::to_string(i);
+        const json& p = passes[i];
+        if (!p.is_object()) throw fail(ptr, "each pass must be an object with 'name' and 'type'");
+        for (auto& [key, v] : p.items())
+            if (key != "name" && key != "type" && key != "params")
+                throw fail(ptr + "/" + key,
+                           "unknown pass field '" + key + "'; valid fields: name, type, params");
+        if (!p.contains("name") || !p["name"].is_string() || p["name"].get<std::string>().empty())
+            throw fail(ptr, "pass needs a non-empty string 'name'");
+        if (!p.contains("type") || !p["type"].is_string())
+            throw fail(ptr, "pass '" + p["name"].get<std::string>() + "' needs a string 'type'");
+        std::string name = p["name"], type = p["type"];
+        if (name.find('.') != std::string::npos || name.find('#') != std::string::npos)
+            throw fail(ptr + "/name", "pass name '" + name + "' must not contain '.' or '#'");
+        if (g->findPass(name)) throw fail(ptr + "/name", "duplicate pass name '" + name + "'");
+        std::unique_ptr<Pass> pass;
+        try {
+            pass = PassRegistry::instance().create(type, name);
+            pass->setBaseDir(g->sourceDir());
+        } catch (const UserError& e) {
+            throw fail(ptr + "/type", "pass '" + name + "': " + e.what());
+        }
+        g->mPassWhere[name] = ptr;
+        if (p.contains("params")) {
+            if (!p["params"].is_object())
+                throw fail(ptr + "/params", "pass '" + name + "': 'params' must be an object");
+            // Parameters may declare further parameters (ComputePass constants), so set
+            // what is declared until nothing changes; what is left is unknown.
+            std::vector<std::string> pending;
+            for (auto& [key, v] : p["params"].items()) pending.push_back(key);
+            bool progress = true;
+            while (!pending.empty() && progress) {
+                progress = false;
+                PassReflection r = pass->reflection();
+                for (auto it = pending.begin(); it != pending.end();) {
+                    if (!r.findParam(*it)) {
+                        ++it;
+                        continue;
+                    }
+                    try {
+                        pass->setParam(*it, p["params"][*it]);
+                    } catch (const UserError& e) {
+                        throw fail(ptr + "/params/" + *it,
+                                   "pass '" + name + "' (" + type + "): " + e.what());
+                    }
+                    it = pending.erase(it);
+                    progress = true;
+                }
+            }
+            if (!pending.empty()) {
+                try {
+                    pass->setParam(pending.front(), p["params"][pending.front()]);
+                } catch (const UserError& e) {
+                    throw fail(ptr + "/params/" + pending.front(), e.what());
+                }
+            }
+        }
+        g->mPasses.push_back(std::move(pass));
+    }
+
+    // Edges.
+    if (root.contains("edges")) {
+        if (!root["edges"].is_array()) throw fail("/edges", "'edges' must be an array");
+        const json& edges = root["edges"];
+        for (size_t i = 0; i < edges.size(); ++i) {
+            std::string ptr = "/edges/" + std::to_string(i);
+            const json& e = edges[i];
+            if (!e.is_array() || e.size() != 2 || !e[0].is_string() || !e[1].is_string())
+                throw fail(ptr, "an edge is [\"src.port\", \"dst.port\"] (or [\"src\", \"dst\"] "
+                                "for an execution-only dependency)");
+            auto [s, sp] = splitPort(e[0]);
+            auto [d, dp] = splitPort(e[1]);
+            if (sp.empty() != dp.empty())
+                throw fail(ptr, "edge mixes a port and a pass: name ports on both ends or on none");
+            g->mEdges.push_back({s, sp, d, dp, g->where(ptr)});
+        }
+    }
+    // Outputs.
+    if (root.contains("outputs")) {
+        if (!root["outputs"].is_array()) throw fail("/outputs", "'outputs' must be an array");
+        for (size_t i = 0; i < root["outputs"].size(); ++i) {
+            const json& o = root["outputs"][i];
+            if (!o.is_string())
+                throw fail("/outputs/" + std::to_string(i), "an output is a \"pass.port\" string");
+            g->mOutputs.push_back(o);
+        }
+    }
+    g->validate();
+    return g;
+}
+
+json RenderGraph::toJson() const {
+    json j;
+    j["name"] = mName;
+    j["passes"] = json::array();
+    for (const auto& p : mPasses) {
+        json pj{{"name", p->name()}, {"type", p->type()}};
+        json params = json::object();
+        for (const auto& [k, v] : p->params()) params[k] = v;
+        if (!params.empty()) pj["params"] = params;
+        j["passes"].push_back(pj);
+    }
+    j["edges"] = json::array();
+    for (const auto& e : mEdges) {
+        if (e.isExecutionOnly())
+            j["edges"].push_back({e.src, e.dst});
+        else
+            j["edges"].push_back({e.src + "." + e.srcPort, e.dst + "." + e.dstPort});
+    }
+    j["outputs"] = mOutputs;
+    return j;
+}
+
+void RenderGraph::save(const std::string& path) const {
+    validate();  // never save a graph that would not load
+    std::ofstream out(path);
+    if (!out) throw GraphError(path + ": cannot write graph file");
+    out << toJson().dump(2) << "\n";
+}
+
+bool RenderGraph::equals(const RenderGraph& other) const { return toJson() == other.toJson(); }
+
+// ---------------------------------------------------------------------------------------------
+// Editing
+
+Pass* RenderGraph::findPass(const std::string& name) const {
+    for (auto& p : mPasses)
+        if (p->name() == name) return p.get();
+    return nullptr;
+}
+
+Pass& RenderGraph::addPass(const std::string& type, const std::string& name, const json& params) {
+    if (name.empty() || name.find('.') != std::string::npos || name.find('#') != std::string::npos)
+        throw GraphError("invalid pass name '" + name + "' (non-empty, no '.' or '#')");
+    if (findPass(name)) throw GraphError("a pass named '" + name + "' already exists");
+    auto pass = PassRegistry::instance().create(type, name);
+    pass->setBaseDir(sourceDir());
+    if (params.is_object())
+        for (auto& [k, v] : params.items()) pass->setParam(k, v);
+    mPasses.push_back(std::move(pass));
+    invalidate("pass '" + name + "' added");
+    return *mPasses.back();
+}
+
+void RenderGraph::removePass(const std::string& name) {
+    auto it = std::find_if(mPasses.begin(), mPasses.end(),
+                           [&](auto& p) { return p->name() == name; });
+    if (it == mPasses.end()) throw GraphError("no pass named '" + name + "'");
+    mPasses.erase(it);
+    std::erase_if(mEdges, [&](auto& e) { return e.src == name || e.dst == name; });
+    std::erase_if(mOutputs, [&](auto& o) { return splitPort(o).first == name; });
+    invalidate("pass '" + name + "' removed");
+}
+
+void RenderGraph::connect(const std::string& from, const std::string& to) {
+    auto [s, sp] = splitPort(from);
+    auto [d, dp] = splitPort(to);
+    if (sp.empty() != dp.empty())
+        throw GraphError("connect: name ports on both ends (a.out, b.in) or on none (a, b)");
+    GraphEdge e{s, sp, d, dp, "connect(" + from + ", " + to + ")"};
+    mEdges.push_back(e);
+    try {
+        validate();
+    } catch (...) {
+        mEdges.pop_back();
+        throw;
+    }
+    invalidate("edge added");
+}
+
+void RenderGraph::disconnect(const std::string& from, const std::string& to) {
+    auto [s, sp] = splitPort(from);
+    auto [d, dp] = splitPort(to);
+    GraphEdge e{s, sp, d, dp, ""};
+    auto n = std::erase_if(mEdges, [&](auto& x) { return x == e; });
+    if (!n) throw GraphError("no edge " + from + " -> " + to);
+    invalidate("edge removed");
+}
+
+void RenderGraph::markOutput(const std::string& port) {
+    if (std::find(mOutputs.begin(), mOutputs.end(), port) != mOutputs.end()) return;
+    mOutputs.push_back(port);
+    try {
+        validate();
+    } catch (...) {
+        mOutputs.pop_back();
+        throw;
+    }
+    invalidate("output marked");
+}
+
+void RenderGraph::unmarkOutput(const std::string& port) {
+    if (!std::erase(mOutputs, port)) throw GraphError("'" + port + "' is not a marked output");
+    invalidate("output unmarked");
+}
+
+void RenderGraph::setParam(const std::string& passDotParam, const json& value) {
+    auto [node, param] = splitPort(passDotParam);
+    Pass* p = findPass(node);
+    if (!p) {
+        std::vector<std::string> names;
+        for (auto& x : mPasses) names.push_back(x->name());
+        throw GraphError("no pass named '" + node + "' (in '" + passDotParam +
+                         "'); passes: " + joinNames(names));
+    }
+    if (param.empty()) throw GraphError("expected PASS.PARAM, got '" + passDotParam + "'");
+    p->setParam(param, value);
+    if (p->paramChangesPorts(param)) invalidate("ports of '" + node + "' changed");
+}
+
+json RenderGraph::getParam(const std::string& passDotParam) const {
+    auto [node, param] = splitPort(passDotParam);
+    Pass* p = findPass(node);
+    if (!p) throw GraphError("no pass named '" + node + "'");
+    return p->getParam(param);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation
+
+void RenderGraph::validate() const {
+    std::map<std::string, PassReflection> refl;
+    for (auto& p : mPasses) refl[p->name()] = p->reflection();
+    auto passWhere = [&](const std::string& name) {
+        auto it = mPassWhere.find(name);
+        return it == mPassWhere.end() ? where("") : where(it->second);
+    };
+    auto nodeNames = [&] {
+        std::vector<std::string> n;
+        for (auto& p : mPasses) n.push_back(p->name());
+        return joinNames(n);
+    };
+    auto requireNode = [&](const std::string& node, const std::string& at) {
+        if (!refl.count(node))
+            throw GraphError(at + ": edge refers to unknown pass '" + node +
+                             "'; passes: " + nodeNames());
+    };
+
+    std::map<std::string, const GraphEdge*> inputSource;
+    for (const auto& e : mEdges) {
+        std::string at = e.where.empty() ? where("/edges") : e.where;
+        requireNode(e.src, at);
+        requireNode(e.dst, at);
+        if (e.src == e.dst) throw GraphError(at + ": pass '" + e.src + "' is connected to itself");
+        if (e.isExecutionOnly()) continue;
+        const Pass* sp = findPass(e.src);
+        const Pass* dp = findPass(e.dst);
+        const PortDesc* so = refl[e.src].findPort(e.srcPort);
+        if (!so || so->isInput)
+            throw GraphError(fmt::format("{}: pass '{}' ({}) has no output '{}'; outputs: {}", at,
+                                         e.src, sp->type(), e.srcPort,
+                                         portList(refl[e.src], false)));
+        const PortDesc* di = refl[e.dst].findPort(e.dstPort);
+        if (!di || !di->isInput)
+            throw GraphError(fmt::format("{}: pass '{}' ({}) has no input '{}'; inputs: {}", at,
+                                         e.dst, dp->type(), e.dstPort,
+                                         portList(refl[e.dst], true)));
+        if (so->kind != di->kind)
+            throw GraphError(fmt::format("{}: {}.{} is a {} but {}.{} expects a {}", at, e.src,
+                                         e.srcPort,
+                                         so->kind == ResourceKind::Texture ? "texture" : "buffer",
+                                         e.dst, e.dstPort,
+                                         di->kind == ResourceKind::Texture ? "texture" : "buffer"));
+        if (so->kind == ResourceKind::Texture && di->format && so->format &&
+            *di->format != *so->format)
+            throw GraphError(fmt::format("{}: format mismatch: {}.{} is {} but {}.{} expects {}",
+                                         at, e.src, e.srcPort, gpu::formatName(*so->format),
+                                         e.dst, e.dstPort, gpu::formatName(*di->format)));
+        std::string key = e.dst + "." + e.dstPort;
+        if (inputSource.count(key))
+            throw GraphError(fmt::format("{}: input {} already has an edge from {}.{}", at, key,
+                                         inputSource[key]->src, inputSource[key]->srcPort));
+        inputSource[key] = &e;
+    }
+
+    if (mOutputs.empty())
+        throw GraphError(where("/outputs") +
+                         ": graph has no marked output; add \"outputs\": [\"pass.port\"]");
+    for (size_t i = 0; i < mOutputs.size(); ++i) {
+        auto [node, port] = splitPort(mOutputs[i]);
+        std::string at = where("/outputs/" + std::to_string(i));
+        if (!refl.count(node))
+            throw GraphError(at + ": output '" + mOutputs[i] + "' names unknown pass '" + node +
+                             "'; passes: " + nodeNames());
+        const PortDesc* pd = refl[node].findPort(port);
+        if (!pd || pd->isInput)
+            throw GraphError(fmt::format("{}: output '{}': pass '{}' has no output port '{}'; "
+                                         "outputs: {}",
+                                         at, mOutputs[i], node, port, portList(refl[node], false)));
+    }
+
+    // Cycles: Kahn over every pass; what remains lies on or behind a cycle.
+    std::map<std::string, int> indeg;
+    std::map<std::string, std::vector<std::string>> succ;
+    for (auto& p : mPasses) indeg[p->name()] = 0;
+    for (auto& e : mEdges) {
+        succ[e.src].push_back(e.dst);
+        ++indeg[e.dst];
+    }
+    std::vector<std::string> ready;
+    for (auto& [n, d] : indeg)
+        if (d == 0) ready.push_back(n);
+    size_t visited = 0;
+    while (!ready.empty()) {
+        std::string n = ready.back();
+        ready.pop_back();
+        ++visited;
+        for (auto& s : succ[n])
+            if (--indeg[s] == 0) ready.push_back(s);
+    }
+    if (visited != mPasses.size()) {
+        // Walk successors inside the remainder until a node repeats: that is a cycle.
+        std::string start;
+        for (auto& [n, d] : indeg)
+            if (d > 0) {
+                start = n;
+                break;
+            }
+        std::vector<std::string> path;
+        std::string cur = start;
+        while (std::find(path.begin(), path.end(), cur) == path.end()) {
+            path.push_back(cur);
+            for (auto& s : succ[cur])
+                if (indeg[s] > 0) {
+                    cur = s;
+                    break;
+                }
+        }
+        auto first = std::find(path.begin(), path.end(), cur);
+        std::vector<std::string> cycle(first, path.end());
+        cycle.push_back(cur);
+        throw GraphError(passWhere(cycle.front()) +
+                         ": graph has a cycle: " + joinNames(cycle, " -> "));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Compilation (no GPU)
+
+CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
+    if (width == 0 || height == 0)
+        throw GraphError(fmt::format("frame size {}x{} is empty", width, height));
+    // Stage 1: validate.
+    validate();
+    std::map<std::string, PassReflection> refl;
+    std::map<std::string, int> index;
+    for (size_t i = 0; i < mPasses.size(); ++i) {
+        refl[mPasses[i]->name()] = mPasses[i]->reflection();
+        index[mPasses[i]->name()] = int(i);
+    }
+
+    // Stage 2: cull passes that feed no marked output.
+    std::set<std::string> keep;
+    std::vector<std::string> stack;
+    for (auto& o : mOutputs) stack.push_back(splitPort(o).first);
+    while (!stack.empty()) {
+        std::string n = stack.back();
+        stack.pop_back();
+        if (!keep.insert(n).second) continue;
+        for (auto& e : mEdges)
+            if (e.dst == n) stack.push_back(e.src);
+    }
+    CompiledGraph cg;
+    cg.width = width;
+    cg.height = height;
+    for (auto& p : mPasses)
+        if (!keep.count(p->name())) cg.culled.push_back(p->name());
+
+    // Required inputs of kept passes must be connected.
+    for (auto& p : mPasses) {
+        if (!keep.count(p->name())) continue;
+        for (auto& port : refl[p->name()].ports()) {
+            if (!port.isInput || port.optional) continue;
+            bool connected = std::any_of(mEdges.begin(), mEdges.end(), [&](auto& e) {
+                return e.dst == p->name() && e.dstPort == port.name;
+            });
+            if (!connected) {
+                auto it = mPassWhere.find(p->name());
+                throw GraphError(fmt::format(
+                    "{}: pass '{}' ({}): required input '{}' is not connected",
+                    it == mPassWhere.end() ? where("") : where(it->second), p->name(), p->type(),
+                    port.name));
+            }
+        }
+    }
+
+    // Stage 3: topological order; ties keep declaration order (determinism).
+    std::map<std::string, int> indeg;
+    for (auto& n : keep) indeg[n] = 0;
+    for (auto& e : mEdges)
+        if (keep.count(e.src) && keep.count(e.dst)) ++indeg[e.dst];
+    std::vector<bool> done(mPasses.size(), false);
+    while (cg.order.size() < keep.size()) {
+        int pick = -1;
+        for (size_t i = 0; i < mPasses.size() && pick < 0; ++i)
+            if (!done[i] && keep.count(mPasses[i]->name()) && indeg[mPasses[i]->name()] == 0)
+                pick = int(i);
+        if (pick < 0) throw GraphError("internal: cycle survived validation");
+        done[pick] = true;
+        cg.order.push_back(pick);
+        for (auto& e : mEdges)
+            if (e.src == mPasses[pick]->name() && keep.count(e.dst)) --indeg[e.dst];
+    }
+    std::map<std::string, int> position;
+    for (size_t i = 0; i < cg.order.size(); ++i) position[mPasses[cg.order[i]]->name()] = int(i);
+    const int end = int(cg.order.size());
+
+    // Stage 4: allocate. One logical resource per produced port that is consumed, marked as
+    // an output, or not optional; persistent resources live for the whole frame and beyond.
+    auto sizeOf = [&](CompiledGraph::Resource& r, const SizeRule& s) {
+        if (r.kind == ResourceKind::Texture) {
+            if (s.mode == SizeRule::Mode::Fixed) {
+                r.width = s.width;
+                r.height = s.height;
+            } else {
+                r.width = std::max(1u, uint32_t(std::lround(width * s.scale)));
+                r.height = std::max(1u, uint32_t(std::lround(height * s.scale)));
+            }
+        } else {
+            r.bytes = s.mode == SizeRule::Mode::Fixed
+                          ? s.bytes
+                          : s.bytesPerPixel * uint64_t(width) * height + s.extraBytes;
+            r.bytes = std::max<uint64_t>(r.bytes, 4);
+        }
+    };
+    for (int pos = 0; pos < end; ++pos) {
+        const Pass& pass = *mPasses[cg.order[pos]];
+        for (auto& port : refl[pass.name()].ports()) {
+            if (port.isInput) continue;
+            std::string key = pass.name() + "." + port.name;
+            bool isOutput = std::find(mOutputs.begin(), mOutputs.end(), key) != mOutputs.end();
+            int last = isOutput ? end : pos;
+            bool consumed = false;
+            for (auto& e : mEdges)
+                if (e.src == pass.name() && e.srcPort == port.name && keep.count(e.dst)) {
+                    consumed = true;
+                    last = std::max(last, position[e.dst]);
+                }
+            if (port.optional && !consumed && !isOutput) continue;
+            CompiledGraph::Resource r;
+            r.name = key;
+            r.kind = port.kind;
+            r.format = port.format.value_or(gpu::Format::RGBA32F);
+            sizeOf(r, port.size);
+            r.firstUse = pos;
+            r.lastUse = last;
+            r.graphOutput = isOutput;
+            cg.portResource[key] = int(cg.resources.size());
+            cg.resources.push_back(r);
+        }
+        for (auto& pd : refl[pass.name()].persistent()) {
+            CompiledGraph::Resource r;
+            r.name = pass.name() + "#" + pd.name;
+            r.kind = pd.kind;
+            r.format = pd.format;
+            sizeOf(r, pd.size);
+            r.firstUse = 0;
+            r.lastUse = end;
+            r.persistent = true;
+            cg.portResource[r.name] = int(cg.resources.size());
+            cg.resources.push_back(r);
+        }
+    }
+    // Inputs point at their producer's resource.
+    for (auto& e : mEdges) {
+        if (e.isExecutionOnly() || !keep.count(e.dst)) continue;
+        auto it = cg.portResource.find(e.src + "." + e.srcPort);
+        if (it != cg.portResource.end()) cg.portResource[e.dst + "." + e.dstPort] = it->second;
+    }
+
+    // Stage 5: alias. Transient resources with identical descriptions and disjoint lifetimes
+    // share one physical resource; persistent resources and graph outputs never alias.
+    struct Slot {
+        int lastUse;
+        const CompiledGraph::Resource* desc;
+        bool shareable;
+    };
+    std::vector<Slot> slots;
+    std::vector<int> byFirstUse(cg.resources.size());
+    for (size_t i = 0; i < byFirstUse.size(); ++i) byFirstUse[i] = int(i);
+    std::stable_sort(byFirstUse.begin(), byFirstUse.end(), [&](int a, int b) {
+        return cg.resources[a].firstUse < cg.resources[b].firstUse;
+    });
+    for (int ri : byFirstUse) {
+        auto& r = cg.resources[ri];
+        bool shareable = !r.persistent && !r.graphOutput;
+        if (shareable) {
+            for (size_t s = 0; s < slots.size(); ++s) {
+                const auto& d = *slots[s].desc;
+                if (slots[s].shareable && slots[s].lastUse < r.firstUse && d.kind == r.kind &&
+                    d.format == r.format && d.width == r.width && d.height == r.height &&
+                    d.bytes == r.bytes) {
+                    r.physical = int(s);
+                    slots[s].lastUse = r.lastUse;
+                    break;
+                }
+            }
+        }
+        if (r.physical < 0) {
+            r.physical = int(slots.size());
+            slots.push_back({r.lastUse, &r, shareable});
+        }
+    }
+    cg.physicalCount = int(slots.size());
+    return cg;
+}
+
+std::string RenderGraph::toGraphviz() const {
+    std::string s = "digraph \"" + mName + "\" {\n  rankdir=LR;\n  node [shape=box];\n";
+    for (auto& p : mPasses)
+        s += fmt::format("  \"{}\" [label=\"{}\\n({})\"];\n", p->name(), p->name(), p->type());
+    for (auto& e : mEdges) {
+        if (e.isExecutionOnly())
+            s += fmt::format("  \"{}\" -> \"{}\" [style=dashed];\n", e.src, e.dst);
+        else
+            s += fmt::format("  \"{}\" -> \"{}\" [label=\"{} -> {}\"];\n", e.src, e.dst,
+                             e.srcPort, e.dstPort);
+    }
+    for (auto& o : mOutputs)
+        s += fmt::format("  \"out:{}\" [shape=ellipse];\n  \"{}\" -> \"out:{}\";\n", o,
+                         splitPort(o).first, o);
+    return s + "}\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Execution
+
+void RenderGraph::invalidate(const std::string& reason) {
+    if (mCompiled && (!mPersistentTextures.empty() || !mPersistentBuffers.empty()))
+        logInfo("graph '{}': {}; persistent resources reset", mName, reason);
+    mCompiled.reset();
+    mPassesCompiled = false;
+}
+
+void RenderGraph::allocate(gpu::Context& gpu) {
+    const auto& cg = *mCompiled;
+    mPhysical.assign(cg.physicalCount, nullptr);
+    std::map<std::string, std::shared_ptr<gpu::Image>> oldTex;
+    std::map<std::string, std::shared_ptr<gpu::Buffer>> oldBuf;
+    mPersistentTextures.clear();
+    mPersistentBuffers.clear();
+    mFreshHistory.clear();
+    for (const auto& r : cg.resources) {
+        if (mPhysical[r.physical]) continue;
+        if (r.kind == ResourceKind::Texture) {
+            auto img = gpu.createImage(r.width, r.height, r.format, r.name);
+            mPhysical[r.physical] = img;
+            if (r.persistent) mPersistentTextures[r.name] = img;
+        } else {
+            auto buf = gpu.createBuffer(r.bytes, r.name);
+            auto cmd = gpu.beginCommands();
+            cmd->fillBuffer(*buf, 0);
+            gpu.submit(*cmd);
+            mPhysical[r.physical] = buf;
+            if (r.persistent) mPersistentBuffers[r.name] = buf;
+        }
+        if (r.persistent) mFreshHistory.insert(r.name.substr(0, r.name.find('#')));
+    }
+}
+
+void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t width,
+                          uint32_t height, uint32_t seed, uint64_t externalRevision) {
+    if (mCompiled && (mCompiled->width != width || mCompiled->height != height))
+        invalidate(fmt::format("resized to {}x{}", width, height));
+    if (!mCompiled) {
+        mCompiled = compile(width, height);
+        for (auto& c : mCompiled->culled)
+            logDebug("graph '{}': pass '{}' feeds no output and is culled", mName, c);
+        allocate(gpu);
+        ++mCompileGeneration;
+    }
+    if (!mPassesCompiled) {
+        for (int pi : mCompiled->order) {
+            try {
+                mPasses[pi]->compile(shaders);
+            } catch (const UserError& e) {
+                throw UserError(fmt::format("pass '{}' ({}): {}", mPasses[pi]->name(),
+                                            mPasses[pi]->type(), e.what()));
+            }
+        }
+        mPassesCompiled = true;
+    }
+
+    const auto& cg = *mCompiled;
+    auto cmd = gpu.beginCommands();
+    std::vector<uint32_t> stamps;
+    stamps.push_back(cmd->timestamp());
+    std::map<std::string, std::set<int>> ancestors;  // for the upstream-change hash
+    for (int pi : cg.order) {
+        Pass& pass = *mPasses[pi];
+        std::set<int> anc{pi};
+        for (auto& e : mEdges)
+            if (e.dst == pass.name()) {
+                anc.insert(ancestors[e.src].begin(), ancestors[e.src].end());
+            }
+        ancestors[pass.name()] = anc;
+        Hasher h;
+        h.add(mCompileGeneration).add(externalRevision).add(uint64_t(width)).add(uint64_t(height));
+        for (int a : anc) h.add(uint64_t(a)).add(mPasses[a]->revision());
+
+        ExecuteContext ctx;
+        ctx.mGpu = &gpu;
+        ctx.mCmd = cmd.get();
+        ctx.mShaders = &shaders;
+        ctx.mPass = pass.name();
+        ctx.mWidth = width;
+        ctx.mHeight = height;
+        ctx.mSeed = seed;
+        ctx.mFrameIndex = mFrameIndex;
+        ctx.mUpstreamChanged = mUpstreamHash[pass.name()] != h.h;
+        mUpstreamHash[pass.name()] = h.h;
+        ctx.mHistoryReset = mFreshHistory.erase(pass.name()) > 0;
+        for (const auto& [key, ri] : cg.portResource) {
+            auto [node, port] = splitPort(key);
+            std::string local;
+            if (node == pass.name()) {
+                local = port;
+            } else {
+                auto hash = key.find('#');
+                if (hash == std::string::npos || key.substr(0, hash) != pass.name()) continue;
+                local = key.substr(hash);
+            }
+            auto& res = mPhysical[cg.resources[ri].physical];
+            if (cg.resources[ri].kind == ResourceKind::Texture)
+                ctx.mTextures[local] = std::static_pointer_cast<gpu::Image>(res);
+            else
+                ctx.mBuffers[local] = std::static_pointer_cast<gpu::Buffer>(res);
+        }
+        try {
+            pass.execute(ctx);
+        } catch (const UserError& e) {
+            throw UserError(fmt::format("pass '{}' ({}): {}", pass.name(), pass.type(), e.what()));
+        } catch (const std::exception& e) {
+            throw std::runtime_error(
+                fmt::format("pass '{}' ({}): {}", pass.name(), pass.type(), e.what()));
+        }
+        cmd->barrier();
+        stamps.push_back(cmd->timestamp());
+    }
+    gpu.submit(*cmd);
+    const auto& ns = cmd->timestampsNs();
+    mTimings.clear();
+    for (size_t i = 0; i < cg.order.size(); ++i)
+        mTimings.push_back(
+            {mPasses[cg.order[i]]->name(), (ns[stamps[i + 1]] - ns[stamps[i]]) * 1e-6});
+    mFrameGpuMs = (ns[stamps.back()] - ns[stamps.front()]) * 1e-6;
+    for (int pi : cg.order) mPasses[pi]->frameCompleted(gpu);
+    ++mFrameIndex;
+}
+
+std::shared_ptr<gpu::Image> RenderGraph::outputTexture(const std::string& port) const {
+    if (!mCompiled) return nullptr;
+    auto it = mCompiled->portResource.find(port);
+    if (it == mCompiled->portResource.end()) return nullptr;
+    const auto& r = mCompiled->resources[it->second];
+    if (r.kind != ResourceKind::Texture) return nullptr;
+    return std::static_pointer_cast<gpu::Image>(mPhysical[r.physical]);
+}
+
+std::shared_ptr<gpu::Buffer> RenderGraph::outputBuffer(const std::string& port) const {
+    if (!mCompiled) return nullptr;
+    auto it = mCompiled->portResource.find(port);
+    if (it == mCompiled->portResource.end()) return nullptr;
+    const auto& r = mCompiled->resources[it->second];
+    if (r.kind != ResourceKind::Buffer) return nullptr;
+    return std::static_pointer_cast<gpu::Buffer>(mPhysical[r.physical]);
+}
+
+size_t RenderGraph::reloadShaders(ShaderLibrary& shaders) {
+    size_t n = shaders.reloadChanged();
+    if (n) mPassesCompiled = false;
+    return n;
+}
+
+}  // namespace loom

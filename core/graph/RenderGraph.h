@@ -1,0 +1,163 @@
+#pragma once
+// Render graph: load/save JSON, validate, compile (validate -> cull -> order -> allocate with
+// aliasing), execute frame by frame with per-pass GPU timings and persistent resources.
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/graph/Pass.h"
+#include "core/graph/ShaderLibrary.h"
+
+namespace loom {
+
+class GraphError : public UserError {
+public:
+    using UserError::UserError;
+};
+
+struct GraphEdge {
+    std::string src, srcPort, dst, dstPort;  // ports empty: execution-only dependency
+    std::string where;                        // source location for messages
+    bool isExecutionOnly() const { return srcPort.empty(); }
+    bool operator==(const GraphEdge& o) const {
+        return src == o.src && srcPort == o.srcPort && dst == o.dst && dstPort == o.dstPort;
+    }
+};
+
+// Result of compile(): everything decided before touching the GPU (testable without one).
+struct CompiledGraph {
+    struct Resource {
+        std::string name;  // "node.port" or "node#persistent"
+        ResourceKind kind = ResourceKind::Texture;
+        gpu::Format format = gpu::Format::RGBA32F;
+        uint32_t width = 0, height = 0;
+        uint64_t bytes = 0;
+        int firstUse = 0, lastUse = 0;  // positions in `order`
+        bool persistent = false;
+        bool graphOutput = false;
+        int physical = -1;  // index into physical resources; equal index = aliased memory
+    };
+    std::vector<int> order;                // pass indices in execution order
+    std::vector<std::string> culled;       // passes that feed no output
+    std::vector<Resource> resources;
+    int physicalCount = 0;
+    std::map<std::string, int> portResource;  // "node.port" (inputs too) -> resource index
+    uint32_t width = 0, height = 0;
+};
+
+class ExecuteContext {
+public:
+    gpu::Context& gpu() { return *mGpu; }
+    gpu::CommandList& cmd() { return *mCmd; }
+    ShaderLibrary& shaders() { return *mShaders; }
+    // nullptr when an optional port is unconnected (or an optional output is unused).
+    std::shared_ptr<gpu::Image> texture(const std::string& port) const;
+    std::shared_ptr<gpu::Buffer> buffer(const std::string& port) const;
+    std::shared_ptr<gpu::Image> persistentTexture(const std::string& name) const;
+    std::shared_ptr<gpu::Buffer> persistentBuffer(const std::string& name) const;
+    bool has(const std::string& port) const;
+    uint32_t width() const { return mWidth; }
+    uint32_t height() const { return mHeight; }
+    uint64_t frameIndex() const { return mFrameIndex; }
+    uint32_t seed() const { return mSeed; }
+    // True when anything upstream (parameters, graph, size, camera) changed since this pass
+    // last ran; Accumulate resets on it.
+    bool upstreamChanged() const { return mUpstreamChanged; }
+    // True when the pass's persistent resources were just (re)allocated.
+    bool historyReset() const { return mHistoryReset; }
+
+private:
+    friend class RenderGraph;
+    gpu::Context* mGpu = nullptr;
+    gpu::CommandList* mCmd = nullptr;
+    ShaderLibrary* mShaders = nullptr;
+    std::string mPass;
+    std::map<std::string, std::shared_ptr<gpu::Image>> mTextures;
+    std::map<std::string, std::shared_ptr<gpu::Buffer>> mBuffers;
+    uint32_t mWidth = 0, mHeight = 0, mSeed = 0;
+    uint64_t mFrameIndex = 0;
+    bool mUpstreamChanged = false, mHistoryReset = false;
+};
+
+struct PassTiming {
+    std::string pass;
+    double gpuMs = 0.0;
+};
+
+class RenderGraph {
+public:
+    RenderGraph() = default;
+    // Load from a JSON file / text. Throws GraphError naming file:line:col, node and field.
+    static std::unique_ptr<RenderGraph> load(const std::string& path);
+    static std::unique_ptr<RenderGraph> parse(const std::string& text, const std::string& filename);
+    json toJson() const;
+    void save(const std::string& path) const;
+    // Structural equality, parameters included (JSON round trip).
+    bool equals(const RenderGraph& other) const;
+
+    // Editing (Lua, inspector). Each validates what it can immediately.
+    Pass& addPass(const std::string& type, const std::string& name, const json& params = {});
+    void removePass(const std::string& name);
+    void connect(const std::string& from, const std::string& to);  // "a.out", "b.in" or "a","b"
+    void disconnect(const std::string& from, const std::string& to);
+    void markOutput(const std::string& port);
+    void unmarkOutput(const std::string& port);
+    void setParam(const std::string& passDotParam, const json& value);
+    json getParam(const std::string& passDotParam) const;
+
+    Pass* findPass(const std::string& name) const;
+    const std::vector<std::unique_ptr<Pass>>& passes() const { return mPasses; }
+    const std::vector<GraphEdge>& edges() const { return mEdges; }
+    const std::vector<std::string>& outputs() const { return mOutputs; }
+    const std::string& name() const { return mName; }
+    const std::string& sourceFile() const { return mSourceFile; }
+    std::string sourceDir() const;
+
+    // Stages: validate -> cull -> order -> allocate. Pure CPU; throws GraphError.
+    CompiledGraph compile(uint32_t width, uint32_t height) const;
+    void validate() const;
+    std::string toGraphviz() const;
+
+    // GPU execution of one frame. Compiles on first use, after edits and on resize.
+    void execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t width, uint32_t height,
+                 uint32_t seed, uint64_t externalRevision = 0);
+    const CompiledGraph* compiled() const { return mCompiled ? &*mCompiled : nullptr; }
+    std::shared_ptr<gpu::Image> outputTexture(const std::string& port) const;
+    std::shared_ptr<gpu::Buffer> outputBuffer(const std::string& port) const;
+    const std::vector<PassTiming>& timings() const { return mTimings; }
+    double frameGpuMs() const { return mFrameGpuMs; }
+    uint64_t frameIndex() const { return mFrameIndex; }
+    // Drop compiled state and persistent resources (logged); next execute recompiles.
+    void invalidate(const std::string& reason);
+    // Recompile passes whose shaders changed on disk (inspector hot reload).
+    size_t reloadShaders(ShaderLibrary& shaders);
+
+private:
+    std::string where(const std::string& pointer) const;
+    void allocate(gpu::Context& gpu);
+
+    std::string mName = "graph";
+    std::string mSourceFile;
+    std::shared_ptr<JsonSource> mSource;
+    std::vector<std::unique_ptr<Pass>> mPasses;
+    std::map<std::string, std::string> mPassWhere;  // pass -> JSON pointer
+    std::vector<GraphEdge> mEdges;
+    std::vector<std::string> mOutputs;
+
+    // Execution state.
+    std::optional<CompiledGraph> mCompiled;
+    bool mPassesCompiled = false;
+    std::vector<std::shared_ptr<void>> mPhysical;  // Image or Buffer per physical index
+    std::map<std::string, std::shared_ptr<gpu::Image>> mPersistentTextures;
+    std::map<std::string, std::shared_ptr<gpu::Buffer>> mPersistentBuffers;
+    std::set<std::string> mFreshHistory;
+    std::map<std::string, uint64_t> mUpstreamHash;
+    uint64_t mCompileGeneration = 0;
+    std::vector<PassTiming> mTimings;
+    double mFrameGpuMs = 0.0;
+    uint64_t mFrameIndex = 0;
+};
+
+}  // namespace loom

@@ -1,0 +1,101 @@
+#include "core/graph/Renderer.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+
+#include "core/util/Log.h"
+
+#ifndef LOOM_SOURCE_DIR
+#define LOOM_SOURCE_DIR ""
+#endif
+
+namespace loom {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> defaultShaderPaths() {
+    std::vector<std::string> paths;
+    if (const char* env = std::getenv("LOOM_SHADER_PATH")) {
+        std::stringstream ss(env);
+        std::string p;
+        while (std::getline(ss, p, ':'))
+            if (!p.empty()) paths.push_back(p);
+    }
+    std::string src = LOOM_SOURCE_DIR;
+    if (!src.empty() && fs::exists(src + "/shaders")) {
+        paths.push_back(src + "/shaders");
+        paths.push_back(src);  // lets graphs name "shaders/..." or "tests/data/..."
+    }
+    std::error_code ec;
+    auto exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+        auto share = exe.parent_path().parent_path() / "share/loom/shaders";
+        if (fs::exists(share)) paths.push_back(share.string());
+    }
+    return paths;
+}
+
+Renderer::Renderer(const Options& o)
+    : mWidth(o.width), mHeight(o.height), mSeed(o.seed) {
+    gpu::Context::Options go;
+    go.device = o.device;
+    go.validation = o.validation;
+    go.cacheDir = o.cacheDir;
+    mGraph = RenderGraph::load(o.graph);  // parse before starting the device: fast errors
+    mGpu = gpu::Context::create(go);
+    mCompiler = std::make_unique<ShaderCompiler>(defaultShaderPaths(), mGpu->cacheDir());
+    mCompiler->addSearchPath(mGraph->sourceDir());
+    mShaders = std::make_unique<ShaderLibrary>(*mGpu, *mCompiler);
+}
+
+Renderer::Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph,
+                   uint32_t width, uint32_t height, uint32_t seed, std::string cacheDir)
+    : mGpu(std::move(gpu)), mGraph(std::move(graph)), mWidth(width), mHeight(height),
+      mSeed(seed) {
+    mCompiler = std::make_unique<ShaderCompiler>(
+        defaultShaderPaths(), cacheDir.empty() ? mGpu->cacheDir() : cacheDir);
+    mCompiler->addSearchPath(mGraph->sourceDir());
+    mShaders = std::make_unique<ShaderLibrary>(*mGpu, *mCompiler);
+}
+
+void Renderer::frame() {
+    mGraph->execute(*mGpu, *mShaders, mWidth, mHeight, mSeed, mExternalRevision);
+    ++mFrames;
+}
+
+void Renderer::resize(uint32_t width, uint32_t height) {
+    mWidth = width;
+    mHeight = height;
+}
+
+void Renderer::reset() { ++mExternalRevision; }
+
+ImageData Renderer::readOutput(const std::string& port) {
+    if (!mGraph->compiled()) frame();
+    auto tex = mGraph->outputTexture(port);
+    if (!tex) {
+        std::string list;
+        for (auto& o : mGraph->outputs()) list += (list.empty() ? "" : ", ") + o;
+        throw UserError("no texture output '" + port + "' in graph '" + mGraph->name() +
+                        "'; marked outputs: " + list);
+    }
+    return downloadImage(*mGpu, *tex);
+}
+
+void Renderer::checkNaN() {
+    for (const auto& port : mGraph->outputs()) {
+        auto tex = mGraph->outputTexture(port);
+        if (!tex || !gpu::isFloatFormat(tex->format())) continue;
+        ImageData img = downloadImage(*mGpu, *tex);
+        for (size_t i = 0; i < img.pixels.size(); ++i)
+            if (!std::isfinite(img.pixels[i])) {
+                size_t p = i / img.channels;
+                throw UserError(fmt::format("NaN/Inf in {} at pixel ({}, {}) channel {}", port,
+                                            p % img.width, p / img.width, i % img.channels));
+            }
+    }
+}
+
+}  // namespace loom

@@ -1,0 +1,60 @@
+#pragma once
+// A graph bound to a GPU context and a frame size, driven frame by frame. The CLI, Lua and
+// the inspector all render through this class.
+#include <memory>
+#include <string>
+
+#include "core/graph/RenderGraph.h"
+#include "core/image/Image.h"
+
+namespace loom {
+
+// Directories shaders are searched in: $LOOM_SHADER_PATH (colon-separated), the build tree's
+// source shaders/, then shaders/ next to the executable's ../share/loom.
+std::vector<std::string> defaultShaderPaths();
+
+class Renderer {
+public:
+    struct Options {
+        std::string graph;  // path to graph JSON (or empty with graphObject set)
+        uint32_t width = 256, height = 256;
+        uint32_t seed = 0;
+        std::string device;
+        std::string cacheDir;  // "" = default
+        bool validation = false;
+    };
+    explicit Renderer(const Options& options);
+    // Use an existing context (tests share one).
+    Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph,
+             uint32_t width, uint32_t height, uint32_t seed = 0, std::string cacheDir = "");
+
+    void frame();
+    void frames(uint32_t n) { for (uint32_t i = 0; i < n; ++i) frame(); }
+    void resize(uint32_t width, uint32_t height);
+    // Restart accumulation and history (bumps the external revision).
+    void reset();
+    void setSeed(uint32_t seed) { mSeed = seed; }
+
+    ImageData readOutput(const std::string& port);
+    // Throws UserError when any float output holds NaN/Inf (names pass.port and pixel).
+    void checkNaN();
+
+    RenderGraph& graph() { return *mGraph; }
+    gpu::Context& gpu() { return *mGpu; }
+    ShaderLibrary& shaders() { return *mShaders; }
+    uint32_t width() const { return mWidth; }
+    uint32_t height() const { return mHeight; }
+    uint32_t seed() const { return mSeed; }
+    uint64_t framesRendered() const { return mFrames; }
+
+private:
+    std::shared_ptr<gpu::Context> mGpu;
+    std::unique_ptr<ShaderCompiler> mCompiler;
+    std::unique_ptr<ShaderLibrary> mShaders;
+    std::unique_ptr<RenderGraph> mGraph;
+    uint32_t mWidth, mHeight, mSeed;
+    uint64_t mExternalRevision = 0;
+    uint64_t mFrames = 0;
+};
+
+}  // namespace loom

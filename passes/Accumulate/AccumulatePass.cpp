@@ -1,0 +1,59 @@
+// Accumulate: running mean and per-pixel variance over frames; resets when anything upstream
+// changes (parameters, graph, size, camera). See README.md.
+#include "core/graph/RenderGraph.h"
+
+namespace loom {
+
+class AccumulatePass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputTexture("input", gpu::Format::RGBA32F).doc("per-frame estimate");
+        r.outputTexture("output", gpu::Format::RGBA32F).doc("mean over accumulated frames");
+        r.outputTexture("variance", gpu::Format::RGBA32F)
+            .optional()
+            .doc("rgb: unbiased per-pixel sample variance of the frames; a: frame count");
+        r.param("enabled", true).doc("accumulate; when false the input passes through");
+        r.param("maxFrames", 0).min(0).doc("stop after this many frames (0 = never)");
+        r.persistentTexture("mean", gpu::Format::RGBA32F, "running mean");
+        r.persistentTexture("m2", gpu::Format::RGBA32F, "running sum of squared deviations");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mPipeline = shaders.pipeline("passes/accumulate/accumulate.comp", {{"HAS_VARIANCE", "0"}});
+        mPipelineVar = shaders.pipeline("passes/accumulate/accumulate.comp", {{"HAS_VARIANCE", "1"}});
+    }
+    void execute(ExecuteContext& ctx) override {
+        if (ctx.upstreamChanged() || ctx.historyReset()) mCount = 0;
+        bool enabled = param<bool>("enabled");
+        int maxFrames = param<int>("maxFrames");
+        if (!enabled) mCount = 0;
+        bool frozen = enabled && maxFrames > 0 && mCount >= uint32_t(maxFrames);
+        auto variance = ctx.texture("variance");
+        const auto& pipeline = variance ? *mPipelineVar : *mPipeline;
+        gpu::Bindings b;
+        b.set("inputImage", ctx.texture("input"))
+            .set("meanImage", ctx.persistentTexture("mean"))
+            .set("m2Image", ctx.persistentTexture("m2"))
+            .set("outputImage", ctx.texture("output"));
+        if (variance) b.set("varianceImage", variance);
+        if (frozen) {
+            // Keep the converged mean: copy instead of adding more frames.
+            ctx.cmd().copyImage(*ctx.persistentTexture("mean"), *ctx.texture("output"));
+            return;
+        }
+        gpu::PushConstants pc(pipeline);
+        uint32_t size[2] = {ctx.width(), ctx.height()};
+        pc.setUints("frameSize", size, 2).set("count", mCount).set("accumulate", uint32_t(enabled));
+        ctx.cmd().dispatchThreads(pipeline, b, &pc, ctx.width(), ctx.height());
+        if (enabled) ++mCount;
+    }
+    std::map<std::string, double> stats() const override { return {{"frames", double(mCount)}}; }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mPipeline, mPipelineVar;
+    uint32_t mCount = 0;
+};
+
+LOOM_REGISTER_PASS(AccumulatePass, "Accumulate",
+                   "Running mean and per-pixel variance over frames; resets on upstream change");
+
+}  // namespace loom
