@@ -53,6 +53,12 @@ std::shared_ptr<gpu::Image> ExecuteContext::persistentTexture(const std::string&
 std::shared_ptr<gpu::Buffer> ExecuteContext::persistentBuffer(const std::string& name) const {
     return buffer("#" + name);
 }
+const scene::SceneGpu& ExecuteContext::scene() const {
+    if (!mFrame.scene)
+        throw UserError("this pass needs a scene; pass one with --scene FILE (or scene= in Lua)");
+    return *mFrame.scene;
+}
+
 bool ExecuteContext::has(const std::string& port) const {
     return mTextures.count(port) || mBuffers.count(port);
 }
@@ -664,7 +670,7 @@ void RenderGraph::allocate(gpu::Context& gpu) {
 }
 
 void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t width,
-                          uint32_t height, uint32_t seed, uint64_t externalRevision) {
+                          uint32_t height, const FrameInputs& frame) {
     if (mCompiled && (mCompiled->width != width || mCompiled->height != height))
         invalidate(fmt::format("resized to {}x{}", width, height));
     if (!mCompiled) {
@@ -700,7 +706,7 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
             }
         ancestors[pass.name()] = anc;
         Hasher h;
-        h.add(mCompileGeneration).add(externalRevision).add(uint64_t(width)).add(uint64_t(height));
+        h.add(mCompileGeneration).add(frame.externalRevision).add(uint64_t(width)).add(uint64_t(height));
         for (int a : anc) h.add(uint64_t(a)).add(mPasses[a]->revision());
 
         ExecuteContext ctx;
@@ -710,7 +716,7 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
         ctx.mPass = pass.name();
         ctx.mWidth = width;
         ctx.mHeight = height;
-        ctx.mSeed = seed;
+        ctx.mFrame = frame;
         ctx.mFrameIndex = mFrameIndex;
         ctx.mUpstreamChanged = mUpstreamHash[pass.name()] != h.h;
         mUpstreamHash[pass.name()] = h.h;

@@ -12,6 +12,18 @@
 
 namespace loom {
 
+namespace scene {
+class SceneGpu;
+}
+
+// Per-frame inputs from the application (CLI, Lua, inspector) to every pass.
+struct FrameInputs {
+    uint32_t seed = 0;
+    uint64_t externalRevision = 0;           // bumped on camera moves / resets
+    const scene::SceneGpu* scene = nullptr;  // nullptr when rendering without a scene
+    float time = 0.0f;                       // animation time in frames
+};
+
 class GraphError : public UserError {
 public:
     using UserError::UserError;
@@ -61,7 +73,11 @@ public:
     uint32_t width() const { return mWidth; }
     uint32_t height() const { return mHeight; }
     uint64_t frameIndex() const { return mFrameIndex; }
-    uint32_t seed() const { return mSeed; }
+    uint32_t seed() const { return mFrame.seed; }
+    // The scene on the GPU; throws UserError naming the pass when none was loaded.
+    const scene::SceneGpu& scene() const;
+    bool hasScene() const { return mFrame.scene != nullptr; }
+    float time() const { return mFrame.time; }
     // True when anything upstream (parameters, graph, size, camera) changed since this pass
     // last ran; Accumulate resets on it.
     bool upstreamChanged() const { return mUpstreamChanged; }
@@ -76,7 +92,8 @@ private:
     std::string mPass;
     std::map<std::string, std::shared_ptr<gpu::Image>> mTextures;
     std::map<std::string, std::shared_ptr<gpu::Buffer>> mBuffers;
-    uint32_t mWidth = 0, mHeight = 0, mSeed = 0;
+    uint32_t mWidth = 0, mHeight = 0;
+    FrameInputs mFrame;
     uint64_t mFrameIndex = 0;
     bool mUpstreamChanged = false, mHistoryReset = false;
 };
@@ -122,7 +139,7 @@ public:
 
     // GPU execution of one frame. Compiles on first use, after edits and on resize.
     void execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t width, uint32_t height,
-                 uint32_t seed, uint64_t externalRevision = 0);
+                 const FrameInputs& frame = {});
     const CompiledGraph* compiled() const { return mCompiled ? &*mCompiled : nullptr; }
     std::shared_ptr<gpu::Image> outputTexture(const std::string& port) const;
     std::shared_ptr<gpu::Buffer> outputBuffer(const std::string& port) const;

@@ -61,7 +61,10 @@ Renderer::Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGrap
 }
 
 void Renderer::frame() {
-    mGraph->execute(*mGpu, *mShaders, mWidth, mHeight, mSeed, mExternalRevision);
+    FrameInputs in;
+    in.seed = mSeed;
+    in.externalRevision = mExternalRevision;
+    mGraph->execute(*mGpu, *mShaders, mWidth, mHeight, in);
     ++mFrames;
 }
 
