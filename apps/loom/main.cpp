@@ -35,6 +35,7 @@ commands:
 
 const char* kRenderHelp = R"(usage: loom render GRAPH [options]
 
+  --scene FILE              scene (.json Loom, .xml Mitsuba 0.5-3, .gltf/.glb, .obj)
   --width W, --height H     frame size (default 256 x 256)
   --frames N                frames to render (default 1)
   --seed K                  random seed (default 0); same seed, same image
@@ -114,6 +115,7 @@ int cmdRender(const std::vector<std::string>& args) {
         else if (a == "--frames") frames = parseUint(a, next());
         else if (a == "--seed") o.seed = parseUint(a, next());
         else if (a == "--device") o.device = next();
+        else if (a == "--scene") o.scene = next();
         else if (a == "--out") out = next();
         else if (a == "--output") outputs.push_back(splitAssign(a, next()));
         else if (a == "--set") sets.push_back(splitAssign(a, next()));

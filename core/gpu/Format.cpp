@@ -19,6 +19,7 @@ constexpr FormatInfo kFormats[] = {
     {Format::R32UI, "r32ui", VK_FORMAT_R32_UINT, 4, 1, false},
     {Format::R32I, "r32i", VK_FORMAT_R32_SINT, 4, 1, false},
     {Format::RGBA8, "rgba8", VK_FORMAT_R8G8B8A8_UNORM, 4, 4, true},
+    {Format::RGBA32UI, "rgba32ui", VK_FORMAT_R32G32B32A32_UINT, 16, 4, false},
 };
 const FormatInfo& info(Format f) { return kFormats[static_cast<int>(f)]; }
 }  // namespace

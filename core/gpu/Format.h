@@ -7,7 +7,7 @@
 namespace loom::gpu {
 
 // Texel formats a graph resource can have. Names match GLSL image format qualifiers.
-enum class Format { RGBA32F, RGBA16F, RG32F, R32F, R32UI, R32I, RGBA8 };
+enum class Format { RGBA32F, RGBA16F, RG32F, R32F, R32UI, R32I, RGBA8, RGBA32UI };
 
 const char* formatName(Format f);  // "rgba32f", ...
 std::optional<Format> parseFormat(const std::string& name);

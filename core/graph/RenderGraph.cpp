@@ -103,6 +103,11 @@ std::unique_ptr<RenderGraph> RenderGraph::parse(const std::string& text,
         if (!root["name"].is_string()) throw fail("/name", "'name' must be a string");
         g->mName = root["name"];
     }
+    if (root.contains("description")) {
+        if (!root["description"].is_string())
+            throw fail("/description", "'description' must be a string");
+        g->mDescription = root["description"];
+    }
     if (!root.contains("passes") || !root["passes"].is_array())
         throw fail("/passes", "a graph needs a 'passes' array");
 
@@ -203,6 +208,7 @@ std::unique_ptr<RenderGraph> RenderGraph::parse(const std::string& text,
 json RenderGraph::toJson() const {
     json j;
     j["name"] = mName;
+    if (!mDescription.empty()) j["description"] = mDescription;
     j["passes"] = json::array();
     for (const auto& p : mPasses) {
         json pj{{"name", p->name()}, {"type", p->type()}};
@@ -420,7 +426,9 @@ void RenderGraph::validate() const {
             if (--indeg[s] == 0) ready.push_back(s);
     }
     if (visited != mPasses.size()) {
-        // Walk successors inside the remainder until a node repeats: that is a cycle.
+        // Walk predecessors inside the remainder until a node repeats: that is a cycle. Every
+        // remaining node has a remaining predecessor (its indegree counts only those), whereas
+        // a node downstream of a cycle may have no remaining successor.
         std::string start;
         for (auto& [n, d] : indeg)
             if (d > 0) {
@@ -431,15 +439,16 @@ void RenderGraph::validate() const {
         std::string cur = start;
         while (std::find(path.begin(), path.end(), cur) == path.end()) {
             path.push_back(cur);
-            for (auto& s : succ[cur])
-                if (indeg[s] > 0) {
-                    cur = s;
+            for (auto& e : mEdges)
+                if (e.dst == cur && indeg[e.src] > 0) {
+                    cur = e.src;
                     break;
                 }
         }
         auto first = std::find(path.begin(), path.end(), cur);
         std::vector<std::string> cycle(first, path.end());
-        cycle.push_back(cur);
+        std::reverse(cycle.begin(), cycle.end());  // predecessor order -> edge order
+        cycle.push_back(cycle.front());
         throw GraphError(passWhere(cycle.front()) +
                          ": graph has a cycle: " + joinNames(cycle, " -> "));
     }

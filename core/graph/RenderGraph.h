@@ -129,6 +129,7 @@ public:
     const std::vector<GraphEdge>& edges() const { return mEdges; }
     const std::vector<std::string>& outputs() const { return mOutputs; }
     const std::string& name() const { return mName; }
+    const std::string& description() const { return mDescription; }
     const std::string& sourceFile() const { return mSourceFile; }
     std::string sourceDir() const;
 
@@ -156,6 +157,7 @@ private:
     void allocate(gpu::Context& gpu);
 
     std::string mName = "graph";
+    std::string mDescription;
     std::string mSourceFile;
     std::shared_ptr<JsonSource> mSource;
     std::vector<std::unique_ptr<Pass>> mPasses;

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "core/scene/SceneGpu.h"
+#include "core/scene/SceneLoader.h"
 #include "core/util/Log.h"
 
 #ifndef LOOM_SOURCE_DIR
@@ -48,6 +50,16 @@ Renderer::Renderer(const Options& o)
     mCompiler = std::make_unique<ShaderCompiler>(defaultShaderPaths(), mGpu->cacheDir());
     mCompiler->addSearchPath(mGraph->sourceDir());
     mShaders = std::make_unique<ShaderLibrary>(*mGpu, *mCompiler);
+    if (!o.scene.empty()) loadScene(o.scene);
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::loadScene(const std::string& path) { setScene(scene::loadScene(path)); }
+
+void Renderer::setScene(scene::Scene s) {
+    mScene = std::make_unique<scene::SceneGpu>(*mGpu, std::move(s));
+    ++mExternalRevision;
 }
 
 Renderer::Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph,
@@ -64,6 +76,12 @@ void Renderer::frame() {
     FrameInputs in;
     in.seed = mSeed;
     in.externalRevision = mExternalRevision;
+    in.time = mTime;
+    if (mScene) {
+        mScene->setFrame(mTime, mWidth, mHeight);
+        in.scene = mScene.get();
+        in.externalRevision += mScene->revision() << 32;
+    }
     mGraph->execute(*mGpu, *mShaders, mWidth, mHeight, in);
     ++mFrames;
 }

@@ -7,6 +7,11 @@
 #include "core/graph/RenderGraph.h"
 #include "core/image/Image.h"
 
+namespace loom::scene {
+class SceneGpu;
+struct Scene;
+}
+
 namespace loom {
 
 // Directories shaders are searched in: $LOOM_SHADER_PATH (colon-separated), the build tree's
@@ -16,7 +21,8 @@ std::vector<std::string> defaultShaderPaths();
 class Renderer {
 public:
     struct Options {
-        std::string graph;  // path to graph JSON (or empty with graphObject set)
+        std::string graph;  // path to graph JSON
+        std::string scene;  // scene file (.json, .xml, .gltf/.glb, .obj); "" = none
         uint32_t width = 256, height = 256;
         uint32_t seed = 0;
         std::string device;
@@ -24,6 +30,7 @@ public:
         bool validation = false;
     };
     explicit Renderer(const Options& options);
+    ~Renderer();
     // Use an existing context (tests share one).
     Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph,
              uint32_t width, uint32_t height, uint32_t seed = 0, std::string cacheDir = "");
@@ -34,6 +41,13 @@ public:
     // Restart accumulation and history (bumps the external revision).
     void reset();
     void setSeed(uint32_t seed) { mSeed = seed; }
+    // Loads a scene (replacing any previous one); its camera drives the frames.
+    void loadScene(const std::string& path);
+    void setScene(scene::Scene scene);
+    scene::SceneGpu* scene() { return mScene.get(); }
+    // Animation time in frames (camera paths); constant unless the application steps it.
+    void setTime(float time) { mTime = time; }
+    float time() const { return mTime; }
 
     ImageData readOutput(const std::string& port);
     // Throws UserError when any float output holds NaN/Inf (names pass.port and pixel).
@@ -52,6 +66,8 @@ private:
     std::unique_ptr<ShaderCompiler> mCompiler;
     std::unique_ptr<ShaderLibrary> mShaders;
     std::unique_ptr<RenderGraph> mGraph;
+    std::unique_ptr<scene::SceneGpu> mScene;
+    float mTime = 0.0f;
     uint32_t mWidth, mHeight, mSeed;
     uint64_t mExternalRevision = 0;
     uint64_t mFrames = 0;

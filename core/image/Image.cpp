@@ -120,9 +120,10 @@ ImageData downloadImage(gpu::Context& gpu, const gpu::Image& image) {
             for (size_t i = 0; i < size_t(n) * 4; ++i) out.pixels[i] = halfToFloat(h[i]);
             break;
         }
-        case Format::R32UI: {
+        case Format::R32UI:
+        case Format::RGBA32UI: {
             auto* u = reinterpret_cast<const uint32_t*>(raw.data());
-            for (size_t i = 0; i < n; ++i) out.pixels[i] = float(u[i]);
+            for (size_t i = 0; i < out.pixels.size(); ++i) out.pixels[i] = float(u[i]);
             break;
         }
         case Format::R32I: {
@@ -160,7 +161,9 @@ void uploadImage(gpu::Context& gpu, const gpu::Image& image, const ImageData& da
                     reinterpret_cast<uint16_t*>(raw.data())[p * dstC + c] = floatToHalf(v);
                     break;
                 case Format::R32UI:
-                    reinterpret_cast<uint32_t*>(raw.data())[p] = uint32_t(std::max(0.0f, v));
+                case Format::RGBA32UI:
+                    reinterpret_cast<uint32_t*>(raw.data())[p * dstC + c] =
+                        uint32_t(std::max(0.0f, v));
                     break;
                 case Format::R32I: reinterpret_cast<int32_t*>(raw.data())[p] = int32_t(v); break;
                 case Format::RGBA8:

@@ -14,7 +14,8 @@ struct Mesh {
     std::string name;
     std::vector<glm::vec3> positions;
     std::vector<glm::vec3> normals;  // per vertex, or empty (flat shading)
-    std::vector<glm::vec2> uvs;      // per vertex, or empty
+    std::vector<glm::vec2> uvs;      // per vertex, or empty; (0,0) = top-left texel (row 0), as
+                                     // Mitsuba (after its OBJ v flip) and glTF use them
     std::vector<glm::uvec3> indices;
     bool faceNormals = false;        // ignore vertex normals (Mitsuba face_normals)
 };
@@ -51,6 +52,9 @@ struct Material {
     glm::vec3 reflectance{0.5f};       // diffuse reflectance (Diffuse/Plastic)
     int reflectanceTexture = -1;       // index into Scene::textures
     glm::vec3 specularReflectance{1.0f};
+    // Textured specular reflectance (Mitsuba conductors, e.g. veach-ajar's checkered floor).
+    // Like reflectanceTexture it replaces the constant, which then holds the texture's mean.
+    int specularReflectanceTexture = -1;
     glm::vec3 specularTransmittance{1.0f};
     float alpha = 0.0f;                // microfacet roughness (GGX/Beckmann alpha)
     Microfacet distribution = Microfacet::GGX;
@@ -59,6 +63,9 @@ struct Material {
     glm::vec3 conductorK{1.0f};
     bool twoSided = false;
     int normalMap = -1;                // index into Scene::textures (tangent-space normal map)
+    // SMS normalmap (Zeltner et al. 2020): interpolate slopes (-nx/nz, -ny/nz) between texels
+    // instead of normals. Texels hold (n + 1) / 2 either way; tiles live in the texture's uvScale.
+    bool normalMapUseSlopes = true;
     bool nonlinear = false;            // roughplastic 'nonlinear' flag
 };
 
@@ -70,6 +77,8 @@ enum ShapeFlags : uint32_t {
     kCausticCasterRefract = 1u << 3,
     kCausticReceiver = 1u << 4,
     kCausticEmitter = 1u << 5,   // SMS caustic_emitter_* tags
+    kCausticBouncer = 1u << 6,   // SMS caustic_bouncer: inner specular vertex of multi-bounce chains
+    kCausticMulti = 1u << 7,     // the caster/emitter tag was *_multi (multi-scatter SMS), not *_single
     kDefaultShapeFlags = kVisibleCamera | kVisibleShadow,
 };
 
@@ -98,6 +107,7 @@ struct Light {
     int envTexture = -1;           // environment map (lat-long)
     float scale = 1.0f;
     glm::mat4 toWorld{1.0f};       // environment rotation
+    uint32_t flags = 0;            // kCausticEmitter (| kCausticMulti) for SMS-tagged lights
 };
 
 struct CameraKeyframe {

@@ -1,0 +1,337 @@
+// GLSL BVH traversal (shaders/lib/bvh.glsl on the default device, lavapipe) against Embree
+// rtcIntersect1/rtcOccluded1 on the same CPU and the same rays: coherent primary rays from a
+// pinhole camera and incoherent diffuse bounces. Prints Mrays/s and the ratio.
+//   bench_bvh [--width W] [--height H] [--reps N] [--detail N] [--embree 0|1]
+//             [--define NAME=VALUE]...   (shader variants of lib/bvh.glsl)
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <thread>
+
+#include "core/gpu/Context.h"
+#include "core/scene/Bvh.h"
+#include "core/shader/ShaderCompiler.h"
+
+namespace {
+
+using namespace loom;
+using Clock = std::chrono::steady_clock;
+
+struct Ray {
+    glm::vec4 o;  // origin, tmin
+    glm::vec4 d;  // direction, tmax
+};
+
+struct SceneMesh {
+    std::vector<glm::vec3> positions;
+    std::vector<glm::uvec3> indices;
+};
+
+void addSphere(SceneMesh& m, glm::vec3 c, float r, uint32_t rings, uint32_t segments) {
+    const uint32_t base = uint32_t(m.positions.size());
+    for (uint32_t i = 0; i <= rings; ++i) {
+        const float theta = float(M_PI) * float(i) / float(rings);
+        for (uint32_t s = 0; s < segments; ++s) {
+            const float phi = 2.0f * float(M_PI) * float(s) / float(segments);
+            m.positions.push_back(c + r * glm::vec3(std::sin(theta) * std::cos(phi),
+                                                    std::cos(theta),
+                                                    std::sin(theta) * std::sin(phi)));
+        }
+    }
+    for (uint32_t i = 0; i < rings; ++i) {
+        for (uint32_t s = 0; s < segments; ++s) {
+            const uint32_t a = base + i * segments + s, b = base + i * segments + (s + 1) % segments;
+            if (i > 0) m.indices.push_back({a, b, a + segments});
+            if (i + 1 < rings) m.indices.push_back({b, b + segments, a + segments});
+        }
+    }
+}
+
+// Rolling terrain with a field of spheres on it: large open areas plus dense clusters, the
+// mix of primary-ray depth complexity a real scene has. ~detail^2 * 2 + spheres triangles.
+SceneMesh makeScene(uint32_t detail) {
+    SceneMesh m;
+    const uint32_t n = detail;
+    auto height = [](float x, float z) {
+        return 0.6f * std::sin(0.35f * x) * std::cos(0.27f * z) + 0.15f * std::sin(1.7f * x + 0.4f * z);
+    };
+    for (uint32_t j = 0; j <= n; ++j) {
+        for (uint32_t i = 0; i <= n; ++i) {
+            const float x = -20.0f + 40.0f * float(i) / float(n);
+            const float z = -20.0f + 40.0f * float(j) / float(n);
+            m.positions.push_back({x, height(x, z), z});
+        }
+    }
+    for (uint32_t j = 0; j < n; ++j) {
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+            m.indices.push_back({a, c, b});
+            m.indices.push_back({b, c, d});
+        }
+    }
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int k = 0; k < 80; ++k) {
+        const float x = -16.0f + 32.0f * u(rng), z = -16.0f + 32.0f * u(rng);
+        const float r = 0.3f + 1.2f * u(rng);
+        addSphere(m, {x, height(x, z) + 0.7f * r, z}, r, 48, 64);
+    }
+    return m;
+}
+
+// Primary rays in 8x8 tiles, 8 consecutive rays = one row of a tile (one SIMD batch).
+std::vector<Ray> primaryRays(uint32_t w, uint32_t h) {
+    const glm::vec3 eye(0.0f, 6.0f, 24.0f), target(0.0f, 0.0f, 0.0f);
+    const glm::vec3 fwd = glm::normalize(target - eye);
+    const glm::vec3 right = glm::normalize(glm::cross(fwd, glm::vec3(0, 1, 0)));
+    const glm::vec3 up = glm::cross(right, fwd);
+    const float tanHalf = std::tan(0.5f * glm::radians(55.0f)), aspect = float(w) / float(h);
+    std::vector<Ray> rays;
+    rays.reserve(size_t(w) * h);
+    for (uint32_t ty = 0; ty < h; ty += 8) {
+        for (uint32_t tx = 0; tx < w; tx += 8) {
+            for (uint32_t y = ty; y < std::min(ty + 8, h); ++y) {
+                for (uint32_t x = tx; x < std::min(tx + 8, w); ++x) {
+                    const float sx = (2.0f * (float(x) + 0.5f) / float(w) - 1.0f) * tanHalf * aspect;
+                    const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(h)) * tanHalf;
+                    const glm::vec3 d = glm::normalize(fwd + sx * right + sy * up);
+                    rays.push_back({glm::vec4(eye, 0.0f), glm::vec4(d, INFINITY)});
+                }
+            }
+        }
+    }
+    return rays;
+}
+
+class EmbreeScene {
+public:
+    EmbreeScene(RTCDevice device, const SceneMesh& m) {
+        mScene = rtcNewScene(device);
+        rtcSetSceneBuildQuality(mScene, RTC_BUILD_QUALITY_HIGH);
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        std::memcpy(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12,
+                                            m.positions.size()),
+                    m.positions.data(), m.positions.size() * 12);
+        std::memcpy(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12,
+                                            m.indices.size()),
+                    m.indices.data(), m.indices.size() * 12);
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(mScene, g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(mScene);
+    }
+    ~EmbreeScene() { rtcReleaseScene(mScene); }
+    RTCScene scene() const { return mScene; }
+
+private:
+    RTCScene mScene;
+};
+
+void toRtc(RTCRay& r, const Ray& ray) {
+    r.org_x = ray.o.x, r.org_y = ray.o.y, r.org_z = ray.o.z, r.tnear = ray.o.w;
+    r.dir_x = ray.d.x, r.dir_y = ray.d.y, r.dir_z = ray.d.z, r.tfar = ray.d.w;
+    r.mask = 0xffffffffu, r.flags = 0, r.time = 0.0f;
+}
+
+// Embree over all rays with `threads` threads (chunks handed out dynamically); returns
+// seconds and fills the hit prim (or ~0u) / occluded flag per ray.
+double embreeTrace(RTCScene scene, const std::vector<Ray>& rays, bool occlusion, int threads,
+                   std::vector<uint32_t>& out) {
+    out.assign(rays.size(), 0u);
+    std::atomic<size_t> next{0};
+    auto worker = [&] {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        constexpr size_t kChunk = 4096;
+        for (size_t begin; (begin = next.fetch_add(kChunk)) < rays.size();) {
+            const size_t end = std::min(begin + kChunk, rays.size());
+            for (size_t i = begin; i < end; ++i) {
+                if (occlusion) {
+                    RTCRay r;
+                    toRtc(r, rays[i]);
+                    rtcOccluded1(scene, &ctx, &r);
+                    out[i] = r.tfar < 0.0f;
+                } else {
+                    RTCRayHit rh;
+                    toRtc(rh.ray, rays[i]);
+                    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                    rtcIntersect1(scene, &ctx, &rh);
+                    out[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? ~0u : rh.hit.primID;
+                }
+            }
+        }
+    };
+    const auto t0 = Clock::now();
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+    worker();
+    for (auto& t : pool) t.join();
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct GpuTracer {
+    std::shared_ptr<gpu::Context> gpu;
+    std::shared_ptr<gpu::ComputePipeline> pipeline;
+    scene::BvhGpu bvh;
+
+    // Best-of-reps device time (timestamps) in seconds; fills prim / occluded per ray.
+    double trace(const std::vector<Ray>& rays, bool anyHit, int reps,
+                 std::vector<uint32_t>& out) {
+        auto rayBuf = gpu->createBuffer(rays.size() * sizeof(Ray), "rays");
+        gpu->uploadBuffer(*rayBuf, rays.data(), rays.size() * sizeof(Ray));
+        auto results = gpu->createBuffer(rays.size() * sizeof(glm::uvec4), "results");
+        gpu::Bindings b;
+        bvh.bind(b);
+        b.set("rays", rayBuf).set("results", results);
+        gpu::PushConstants pc(*pipeline);
+        pc.set("rayCount", uint32_t(rays.size())).set("mask", 0xffu).set("anyHit", uint32_t(anyHit));
+        double best = INFINITY;
+        for (int r = 0; r <= reps; ++r) {  // rep 0 warms up (lavapipe compiles lazily)
+            auto cmd = gpu->beginCommands();
+            const uint32_t t0 = cmd->timestamp();
+            cmd->dispatchThreads(*pipeline, b, &pc, uint32_t(rays.size()));
+            const uint32_t t1 = cmd->timestamp();
+            const auto w0 = Clock::now();
+            gpu->submit(*cmd);
+            double s = std::chrono::duration<double>(Clock::now() - w0).count();
+            const auto& ts = cmd->timestampsNs();
+            if (ts.size() > t1 && ts[t1] > ts[t0]) s = (ts[t1] - ts[t0]) * 1e-9;
+            if (r > 0) best = std::min(best, s);
+        }
+        std::vector<glm::uvec4> hits(rays.size());
+        gpu->downloadBuffer(*results, hits.data(), hits.size() * sizeof(glm::uvec4));
+        out.resize(rays.size());
+        for (size_t i = 0; i < rays.size(); ++i) out[i] = anyHit ? hits[i].x : hits[i].y;
+        if (std::getenv("BVH_STATS") && !anyHit) {  // EXP_STATS: nodes, triangles per ray
+            double n = 0, t = 0, n8 = 0, t8 = 0;
+            for (size_t i = 0; i < rays.size(); i += 8) {
+                uint32_t mn = 0, mt = 0;
+                for (size_t k = i; k < std::min(i + 8, rays.size()); ++k) {
+                    n += hits[k].z, t += hits[k].w;
+                    mn = std::max(mn, hits[k].z), mt = std::max(mt, hits[k].w);
+                }
+                n8 += 8.0 * mn, t8 += 8.0 * mt;
+            }
+            std::printf("  per ray: %.1f nodes, %.1f triangles; SIMD-8 max: %.1f nodes, %.1f tris\n",
+                        n / rays.size(), t / rays.size(), n8 / rays.size(), t8 / rays.size());
+        }
+        return best;
+    }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    uint32_t width = 1024, height = 768, detail = 300;
+    int reps = 3;
+    bool embreeRuns = true;
+    ShaderDefines defines;
+    for (int i = 1; i + 1 < argc; i += 2) {
+        const std::string a = argv[i];
+        const uint32_t v = uint32_t(std::atoi(argv[i + 1]));
+        if (a == "--width") width = v;
+        else if (a == "--height") height = v;
+        else if (a == "--reps") reps = int(v);
+        else if (a == "--detail") detail = v;
+        else if (a == "--embree") embreeRuns = v != 0;
+        else if (a == "--define") {  // NAME=VALUE, a shader variant to compare
+            const std::string d = argv[i + 1];
+            const size_t eq = d.find('=');
+            defines[d.substr(0, eq)] = eq == std::string::npos ? "1" : d.substr(eq + 1);
+        } else {
+            std::fprintf(stderr, "unknown option %s\n", argv[i]);
+            return 2;
+        }
+    }
+
+    const SceneMesh mesh = makeScene(detail);
+    const scene::BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, {});
+    std::printf("scene: %zu triangles; BVH8: %u nodes (%.1f MB), %u leaves, %u triangle refs "
+                "(%.1f MB), depth %u, built in %.0f ms\n",
+                mesh.indices.size(), build.stats.nodes, build.nodes.size() * 80.0 / 1e6,
+                build.stats.leaves, build.stats.triangleRefs, build.triangles.size() * 48.0 / 1e6,
+                build.stats.depth, build.stats.buildMs);
+
+    GpuTracer gpuTracer;
+    gpuTracer.gpu = gpu::Context::create();
+    ShaderCompiler compiler({LOOM_SOURCE_DIR "/shaders", LOOM_SOURCE_DIR}, "");
+    auto shader = compiler.compile("tests/data/bvh_trace.comp", defines);
+    gpuTracer.pipeline = gpuTracer.gpu->createPipeline(shader->spirv, shader->reflection, "bvh_trace");
+    gpuTracer.bvh.upload(*gpuTracer.gpu, build);
+    const char* lpThreads = std::getenv("LP_NUM_THREADS");
+    std::printf("device: %s (LP_NUM_THREADS=%s), CPU threads: %u\n",
+                gpuTracer.gpu->deviceInfo().name.c_str(), lpThreads ? lpThreads : "default",
+                std::thread::hardware_concurrency());
+
+    RTCDevice device = rtcNewDevice(nullptr);
+    EmbreeScene embree(device, mesh);
+
+    // Ray sets: primary, then diffuse bounces from the primary hits (Embree's hits, so both
+    // tracers get identical rays), then shadow rays towards a point light from those hits.
+    std::vector<Ray> primary = primaryRays(width, height);
+    std::vector<Ray> diffuse, shadow;
+    {
+        std::mt19937 rng(5);
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        const glm::vec3 light(5.0f, 12.0f, 6.0f);
+        for (const Ray& r : primary) {
+            RTCRayHit rh;
+            toRtc(rh.ray, r);
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(embree.scene(), &ctx, &rh);
+            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+            const glm::vec3 p = glm::vec3(r.o) + rh.ray.tfar * glm::vec3(r.d);
+            glm::vec3 n = glm::normalize(glm::vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
+            if (glm::dot(n, glm::vec3(r.d)) > 0.0f) n = -n;
+            // Cosine-weighted direction about n (Malley's method).
+            const float r1 = u(rng), phi = 2.0f * float(M_PI) * u(rng);
+            const glm::vec3 t = glm::normalize(std::abs(n.x) > 0.5f ? glm::cross(n, {0, 1, 0})
+                                                                    : glm::cross(n, {1, 0, 0}));
+            const glm::vec3 b = glm::cross(n, t);
+            const glm::vec3 d = std::sqrt(r1) * (std::cos(phi) * t + std::sin(phi) * b) +
+                                std::sqrt(1.0f - r1) * n;
+            const glm::vec3 o = p + 1e-3f * n;
+            diffuse.push_back({glm::vec4(o, 0.0f), glm::vec4(glm::normalize(d), INFINITY)});
+            const glm::vec3 toLight = light - o;
+            shadow.push_back({glm::vec4(o, 0.0f),
+                              glm::vec4(glm::normalize(toLight), glm::length(toLight))});
+        }
+    }
+
+    struct Set {
+        const char* name;
+        const std::vector<Ray>* rays;
+        bool anyHit;
+    };
+    const Set sets[] = {{"primary (coherent)", &primary, false},
+                        {"diffuse bounce (incoherent)", &diffuse, false},
+                        {"shadow, any hit", &shadow, true}};
+    std::printf("\n%-28s %9s %12s %12s %12s %9s %9s %8s\n", "rays", "count", "GLSL Mray/s",
+                "Embree 1T", "Embree 2T", "GLSL/1T", "GLSL/2T", "differ");
+    for (const Set& s : sets) {
+        std::vector<uint32_t> g, e1, e2;
+        const double tg = gpuTracer.trace(*s.rays, s.anyHit, reps, g);
+        double t1 = INFINITY, t2 = INFINITY;
+        for (int r = 0; r < (embreeRuns ? reps : 1); ++r) {
+            t1 = std::min(t1, embreeTrace(embree.scene(), *s.rays, s.anyHit, 1, e1));
+            if (embreeRuns) t2 = std::min(t2, embreeTrace(embree.scene(), *s.rays, s.anyHit, 2, e2));
+        }
+        size_t differ = 0;
+        for (size_t i = 0; i < g.size(); ++i) differ += g[i] != e1[i];
+        const double n = double(s.rays->size()) * 1e-6;
+        std::printf("%-28s %9zu %12.2f %12.2f %12.2f %9.2f %9.2f %8zu\n", s.name, s.rays->size(),
+                    n / tg, n / t1, n / t2, t1 / tg, t2 / tg, differ);
+    }
+    rtcReleaseDevice(device);
+    return 0;
+}

@@ -1,0 +1,394 @@
+#include "core/scene/Bvh.h"
+
+#include <embree3/rtcore.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "core/gpu/Context.h"
+#include "core/util/Error.h"
+
+namespace loom::scene {
+
+namespace {
+
+// Nodes produced by the Embree callbacks (thread-local allocator memory, freed with the BVH).
+struct BuildNode {
+    bool leaf = false;
+};
+
+struct BuildInner : BuildNode {
+    uint32_t count = 0;
+    uint32_t mask = 0;  // union of the subtree's triangle masks (filled after the build)
+    BuildNode* children[8] = {};
+    RTCBounds bounds[8] = {};
+};
+
+struct BuildLeaf : BuildNode {
+    uint32_t count = 0;
+    uint32_t prims[RTC_BUILD_MAX_PRIMITIVES_PER_LEAF] = {};
+};
+
+struct BuildInput {
+    const std::vector<glm::vec3>* positions;
+    const std::vector<glm::uvec3>* triangles;
+};
+
+void* createNode(RTCThreadLocalAllocator alloc, unsigned int childCount, void*) {
+    void* mem = rtcThreadLocalAlloc(alloc, sizeof(BuildInner), 16);
+    auto* node = new (mem) BuildInner();
+    node->count = childCount;
+    return node;
+}
+
+void setNodeChildren(void* nodePtr, void** children, unsigned int childCount, void*) {
+    auto* node = static_cast<BuildInner*>(nodePtr);
+    for (unsigned i = 0; i < childCount; ++i) node->children[i] = static_cast<BuildNode*>(children[i]);
+}
+
+void setNodeBounds(void* nodePtr, const RTCBounds** bounds, unsigned int childCount, void*) {
+    auto* node = static_cast<BuildInner*>(nodePtr);
+    for (unsigned i = 0; i < childCount; ++i) node->bounds[i] = *bounds[i];
+}
+
+void* createLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t count,
+                 void*) {
+    void* mem = rtcThreadLocalAlloc(alloc, sizeof(BuildLeaf), 16);
+    auto* leaf = new (mem) BuildLeaf();
+    leaf->leaf = true;
+    leaf->count = uint32_t(count);
+    for (size_t i = 0; i < count; ++i) leaf->prims[i] = prims[i].primID;
+    return leaf;
+}
+
+// Spatial split (Stich et al. 2009, SBVH): bounds of the triangle's parts on either side of
+// the plane, clipped to the reference's current bounds.
+void splitPrimitive(const RTCBuildPrimitive* prim, unsigned int dim, float pos, RTCBounds* left,
+                    RTCBounds* right, void* user) {
+    const auto* in = static_cast<const BuildInput*>(user);
+    const glm::uvec3 tri = (*in->triangles)[prim->primID];
+    glm::vec3 v[3] = {(*in->positions)[tri.x], (*in->positions)[tri.y], (*in->positions)[tri.z]};
+    glm::vec3 lo[2] = {glm::vec3(INFINITY), glm::vec3(INFINITY)};
+    glm::vec3 hi[2] = {glm::vec3(-INFINITY), glm::vec3(-INFINITY)};
+    auto grow = [&](int side, glm::vec3 p) {
+        lo[side] = glm::min(lo[side], p);
+        hi[side] = glm::max(hi[side], p);
+    };
+    for (int i = 0; i < 3; ++i) {
+        glm::vec3 a = v[i], b = v[(i + 1) % 3];
+        if (a[dim] <= pos) grow(0, a);
+        if (a[dim] >= pos) grow(1, a);
+        if ((a[dim] < pos && b[dim] > pos) || (a[dim] > pos && b[dim] < pos)) {
+            glm::vec3 p = glm::mix(a, b, (pos - a[dim]) / (b[dim] - a[dim]));
+            p[dim] = pos;
+            grow(0, p);
+            grow(1, p);
+        }
+    }
+    const glm::vec3 plo(prim->lower_x, prim->lower_y, prim->lower_z);
+    const glm::vec3 phi(prim->upper_x, prim->upper_y, prim->upper_z);
+    RTCBounds* out[2] = {left, right};
+    for (int s = 0; s < 2; ++s) {
+        glm::vec3 l = glm::max(lo[s], plo), h = glm::min(hi[s], phi);
+        if (s == 0) h[dim] = std::min(h[dim], pos);
+        if (s == 1) l[dim] = std::max(l[dim], pos);
+        h = glm::max(h, l);  // an empty side (rounding) stays a valid box
+        *out[s] = RTCBounds{l.x, l.y, l.z, 0.0f, h.x, h.y, h.z, 0.0f};
+    }
+}
+
+uint32_t subtreeMask(BuildNode* node, const std::vector<uint32_t>& masks, uint32_t depth,
+                     uint32_t& maxDepth) {
+    maxDepth = std::max(maxDepth, depth);
+    if (node->leaf) {
+        auto* leaf = static_cast<BuildLeaf*>(node);
+        uint32_t m = 0;
+        for (uint32_t i = 0; i < leaf->count; ++i) m |= masks[leaf->prims[i]];
+        return m;
+    }
+    auto* inner = static_cast<BuildInner*>(node);
+    inner->mask = 0;
+    for (uint32_t i = 0; i < inner->count; ++i)
+        inner->mask |= subtreeMask(inner->children[i], masks, depth + 1, maxDepth);
+    return inner->mask;
+}
+
+// Power-of-two scale per axis so 255 steps cover the node (Ylitie et al. 2017, Sec. 3.1).
+uint8_t quantExponent(float lo, float hi) {
+    float extent = hi - lo;
+    if (!(extent > 0.0f)) return 1;  // degenerate axis: smallest normal scale
+    int e = int(std::ceil(std::log2(extent / 255.0f)));
+    // log2 rounding: make sure lo + 255 * 2^e really reaches hi, as the shader computes it.
+    while (e < 127 && lo + 255.0f * std::ldexp(1.0f, e) < hi) ++e;
+    return uint8_t(std::clamp(e + 127, 1, 254));
+}
+
+// Child slot per ray octant: slot bit k set = child lies towards +axis k, so the traversal's
+// first slot for a ray with sign bits o is o (nearest corner first). Greedy matching.
+std::array<int, 8> assignSlots(const BuildInner& node) {
+    glm::vec3 c[8];
+    glm::vec3 parent(0.0f);
+    for (uint32_t i = 0; i < node.count; ++i) {
+        const RTCBounds& b = node.bounds[i];
+        c[i] = 0.5f * glm::vec3(b.lower_x + b.upper_x, b.lower_y + b.upper_y,
+                                b.lower_z + b.upper_z);
+        parent += c[i] / float(node.count);
+    }
+    struct Candidate {
+        float cost;
+        int child, slot;
+    };
+    std::vector<Candidate> candidates;
+    for (uint32_t i = 0; i < node.count; ++i) {
+        for (int s = 0; s < 8; ++s) {
+            glm::vec3 dir((s & 1) ? 1.0f : -1.0f, (s & 2) ? 1.0f : -1.0f, (s & 4) ? 1.0f : -1.0f);
+            candidates.push_back({-glm::dot(c[i] - parent, dir), int(i), s});
+        }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+    std::array<int, 8> slotChild;
+    slotChild.fill(-1);
+    bool placed[8] = {};
+    for (const Candidate& k : candidates) {
+        if (placed[k.child] || slotChild[k.slot] >= 0) continue;
+        placed[k.child] = true;
+        slotChild[k.slot] = k.child;
+    }
+    return slotChild;
+}
+
+}  // namespace
+
+std::vector<glm::ivec3> triangleAdjacency(const std::vector<glm::uvec3>& indices) {
+    // Undirected edge -> every (triangle, edge) using it, in input order.
+    std::unordered_map<uint64_t, std::vector<uint32_t>> edges;
+    edges.reserve(indices.size() * 2);
+    auto key = [](uint32_t a, uint32_t b) {
+        return (uint64_t(std::min(a, b)) << 32) | uint64_t(std::max(a, b));
+    };
+    for (uint32_t t = 0; t < indices.size(); ++t) {
+        for (int k = 0; k < 3; ++k) {
+            uint32_t a = indices[t][k], b = indices[t][(k + 1) % 3];
+            if (a == b) continue;  // degenerate edge: no neighbour
+            edges[key(a, b)].push_back(t * 3 + uint32_t(k));
+        }
+    }
+    std::vector<glm::ivec3> adjacency(indices.size(), glm::ivec3(-1));
+    for (const auto& [edge, uses] : edges) {
+        if (uses.size() < 2) continue;
+        for (size_t i = 0; i < uses.size(); ++i) {
+            uint32_t next = uses[(i + 1) % uses.size()];
+            adjacency[uses[i] / 3][int(uses[i] % 3)] = int(next / 3);
+        }
+    }
+    return adjacency;
+}
+
+BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
+                  const std::vector<glm::uvec3>& triangles,
+                  const std::vector<uint32_t>& triMask, const BvhBuildOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
+    if (!triMask.empty() && triMask.size() != triangles.size())
+        throw UserError(fmt::format("buildBvh: {} triangle masks for {} triangles",
+                                    triMask.size(), triangles.size()));
+    if (options.maxLeafSize < 1 || options.maxLeafSize > 3)
+        throw UserError(fmt::format("buildBvh: maxLeafSize {} is not in 1..3",
+                                    options.maxLeafSize));
+    std::vector<uint32_t> masks(triangles.size(), 0xffu);
+    for (size_t i = 0; i < triMask.size(); ++i) {
+        if (triMask[i] > 0xffu)
+            throw UserError(fmt::format(
+                "buildBvh: triangle {} has mask 0x{:x}; ray masks have 8 bits", i, triMask[i]));
+        masks[i] = triMask[i];
+    }
+
+    // Build primitives: one box per triangle; spatial splits need spare capacity.
+    std::vector<RTCBuildPrimitive> prims;
+    prims.reserve(options.spatialSplits ? triangles.size() * 2 : triangles.size());
+    glm::vec3 sceneLo(INFINITY), sceneHi(-INFINITY);
+    for (uint32_t t = 0; t < triangles.size(); ++t) {
+        glm::vec3 lo(INFINITY), hi(-INFINITY);
+        for (int k = 0; k < 3; ++k) {
+            if (triangles[t][k] >= positions.size())
+                throw UserError(fmt::format("buildBvh: triangle {} uses vertex {} of {}", t,
+                                            triangles[t][k], positions.size()));
+            const glm::vec3& p = positions[triangles[t][k]];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                throw UserError(fmt::format("buildBvh: vertex {} is not finite", triangles[t][k]));
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+        }
+        sceneLo = glm::min(sceneLo, lo);
+        sceneHi = glm::max(sceneHi, hi);
+        prims.push_back(RTCBuildPrimitive{lo.x, lo.y, lo.z, 0u, hi.x, hi.y, hi.z, t});
+    }
+    const size_t primCount = prims.size();
+    prims.resize(prims.capacity());
+
+    BvhBuild out;
+    if (triangles.empty()) {
+        out.nodes.push_back(BvhNode{});  // all slots empty: every ray misses
+        out.stats.nodes = 1;
+        return out;
+    }
+    out.lower = sceneLo;
+    out.upper = sceneHi;
+
+    RTCDevice device = rtcNewDevice(nullptr);
+    if (!device) throw std::runtime_error("buildBvh: rtcNewDevice failed");
+    RTCBVH bvh = rtcNewBVH(device);
+    BuildInput input{&positions, &triangles};
+    RTCBuildArguments args = rtcDefaultBuildArguments();
+    args.byteSize = sizeof(args);
+    args.buildQuality = options.spatialSplits ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
+    args.maxBranchingFactor = 8;
+    args.maxDepth = kBvhMaxDepth;
+    args.sahBlockSize = 1;
+    args.minLeafSize = 1;
+    args.maxLeafSize = options.maxLeafSize;
+    args.traversalCost = 1.0f;
+    args.intersectionCost = 1.0f;
+    args.bvh = bvh;
+    args.primitives = prims.data();
+    args.primitiveCount = primCount;
+    args.primitiveArrayCapacity = prims.size();
+    args.createNode = createNode;
+    args.setNodeChildren = setNodeChildren;
+    args.setNodeBounds = setNodeBounds;
+    args.createLeaf = createLeaf;
+    args.splitPrimitive = splitPrimitive;
+    args.userPtr = &input;
+    auto* root = static_cast<BuildNode*>(rtcBuildBVH(&args));
+    if (!root) {
+        const RTCError err = rtcGetDeviceError(device);
+        rtcReleaseBVH(bvh);
+        rtcReleaseDevice(device);
+        throw std::runtime_error(fmt::format("buildBvh: rtcBuildBVH failed (error {})", int(err)));
+    }
+
+    // A root leaf becomes the single child of an inner root.
+    BuildInner rootWrap;
+    if (root->leaf) {
+        rootWrap.count = 1;
+        rootWrap.children[0] = root;
+        rootWrap.bounds[0] = RTCBounds{sceneLo.x, sceneLo.y, sceneLo.z, 0.0f,
+                                       sceneHi.x, sceneHi.y, sceneHi.z, 0.0f};
+        root = &rootWrap;
+    }
+    subtreeMask(root, masks, 1, out.stats.depth);
+
+    // Flatten depth first; the internal children of a node get consecutive indices.
+    struct Work {
+        const BuildInner* node;
+        uint32_t index;
+    };
+    std::vector<Work> work{{static_cast<const BuildInner*>(root), 0}};
+    out.nodes.resize(1);
+    while (!work.empty()) {
+        const Work w = work.back();
+        work.pop_back();
+        const BuildInner& src = *w.node;
+        BvhNode node{};
+        glm::vec3 lo(INFINITY), hi(-INFINITY);
+        for (uint32_t i = 0; i < src.count; ++i) {
+            const RTCBounds& b = src.bounds[i];
+            lo = glm::min(lo, glm::vec3(b.lower_x, b.lower_y, b.lower_z));
+            hi = glm::max(hi, glm::vec3(b.upper_x, b.upper_y, b.upper_z));
+        }
+        node.origin = lo;
+        float scale[3];
+        for (int a = 0; a < 3; ++a) {
+            node.exponent[a] = quantExponent(lo[a], hi[a]);
+            scale[a] = std::ldexp(1.0f, int(node.exponent[a]) - 127);
+        }
+        const std::array<int, 8> slotChild = assignSlots(src);
+        uint32_t innerCount = 0;
+        for (int s = 0; s < 8; ++s)
+            if (slotChild[s] >= 0 && !src.children[slotChild[s]]->leaf) ++innerCount;
+        node.childBase = uint32_t(out.nodes.size());
+        if (node.childBase >= (1u << 24))
+            throw UserError("buildBvh: more than 2^24 BVH nodes (scene too large)");
+        node.childBase |= src.mask << 24;
+        node.triangleBase = uint32_t(out.triangles.size());
+        uint32_t nextInner = uint32_t(out.nodes.size());
+        out.nodes.resize(out.nodes.size() + innerCount);
+        uint32_t triOffset = 0;
+        for (int s = 0; s < 8; ++s) {
+            if (slotChild[s] < 0) continue;
+            const BuildNode* child = src.children[slotChild[s]];
+            const RTCBounds& b = src.bounds[slotChild[s]];
+            const float clo[3] = {b.lower_x, b.lower_y, b.lower_z};
+            const float chi[3] = {b.upper_x, b.upper_y, b.upper_z};
+            // Conservative quantisation: decoded lo <= child lo, decoded hi >= child hi.
+            for (int a = 0; a < 3; ++a) {
+                int ql = int(std::floor((clo[a] - lo[a]) / scale[a]));
+                int qh = int(std::ceil((chi[a] - lo[a]) / scale[a]));
+                ql = std::clamp(ql, 0, 255);
+                qh = std::clamp(qh, 0, 255);
+                while (ql > 0 && lo[a] + float(ql) * scale[a] > clo[a]) --ql;
+                while (qh < 255 && lo[a] + float(qh) * scale[a] < chi[a]) ++qh;
+                node.q[a][0][s] = uint8_t(ql);
+                node.q[a][1][s] = uint8_t(qh);
+            }
+            if (child->leaf) {
+                const auto* leaf = static_cast<const BuildLeaf*>(child);
+                node.meta[s] = uint8_t((((1u << leaf->count) - 1u) << 5) | triOffset);
+                for (uint32_t i = 0; i < leaf->count; ++i) {
+                    const uint32_t p = leaf->prims[i];
+                    const glm::uvec3 t = triangles[p];
+                    const glm::vec3 v0 = positions[t.x];
+                    out.triangles.push_back(BvhTriangle{v0, p, positions[t.y] - v0, masks[p],
+                                                        positions[t.z] - v0, 0u});
+                }
+                triOffset += leaf->count;
+                ++out.stats.leaves;
+            } else {
+                node.imask |= uint8_t(1u << s);
+                node.meta[s] = uint8_t((1u << 5) | (24u + uint32_t(s)));
+                work.push_back({static_cast<const BuildInner*>(child), nextInner++});
+            }
+        }
+        out.nodes[w.index] = node;
+    }
+    rtcReleaseBVH(bvh);
+    rtcReleaseDevice(device);
+
+    std::vector<glm::ivec3> adjacency = triangleAdjacency(triangles);
+    out.adjacency.resize(adjacency.size());
+    for (size_t i = 0; i < adjacency.size(); ++i) out.adjacency[i] = glm::ivec4(adjacency[i], 0);
+
+    out.stats.nodes = uint32_t(out.nodes.size());
+    out.stats.triangleRefs = uint32_t(out.triangles.size());
+    out.stats.buildMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count();
+    return out;
+}
+
+void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build) {
+    // Empty arrays still get a small buffer: every binding must be valid.
+    auto make = [&](const void* data, size_t bytes, const char* name) {
+        auto buffer = gpu.createBuffer(std::max<size_t>(bytes, 16), name);
+        if (bytes) gpu.uploadBuffer(*buffer, data, bytes);
+        return buffer;
+    };
+    nodes = make(build.nodes.data(), build.nodes.size() * sizeof(BvhNode), "bvh_nodes");
+    triangles = make(build.triangles.data(), build.triangles.size() * sizeof(BvhTriangle),
+                     "bvh_tris");
+    adjacency = make(build.adjacency.data(), build.adjacency.size() * sizeof(glm::ivec4),
+                     "bvh_adjacency");
+    nodeCount = uint32_t(build.nodes.size());
+    triangleCount = uint32_t(build.triangles.size());
+}
+
+void BvhGpu::bind(gpu::Bindings& bindings) const {
+    bindings.set("bvh_nodes", nodes).set("bvh_tris", triangles).set("bvh_adjacency", adjacency);
+}
+
+}  // namespace loom::scene

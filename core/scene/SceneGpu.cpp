@@ -1,0 +1,329 @@
+#include "core/scene/SceneGpu.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "core/scene/Bvh.h"
+#include "core/scene/Camera.h"
+#include "core/scene/EnvMapDistribution.h"
+#include "core/scene/MaterialGpu.h"
+#include "core/util/Error.h"
+#include "core/util/Log.h"
+
+namespace loom::scene {
+
+namespace {
+
+// Layouts mirrored from shaders/lib/scene.glsl (std430; every member 16-byte friendly).
+struct VertexGpu {
+    glm::vec4 positionU;
+    glm::vec4 normalV;
+};
+struct ShapeGpu {
+    uint32_t material, flags, lightOffset, firstTriangle;
+    glm::vec4 emission;
+};
+struct TextureGpu {
+    uint32_t offset, width, height, kind;
+    glm::vec4 color0, color1, uvScale;
+};
+struct LightGpu {
+    uint32_t type, index;
+    float pmf, pad;
+    glm::vec4 p0, p1, p2;
+};
+struct CameraPoseGpu {
+    glm::vec4 origin, target, up, lens;
+};
+struct SceneInfoGpu {
+    CameraPoseGpu open, close, prev;
+    glm::uvec4 counts;
+    glm::vec4 boundsCenter;
+};
+static_assert(sizeof(VertexGpu) == 32 && sizeof(ShapeGpu) == 32 && sizeof(TextureGpu) == 64 &&
+              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 3 * 64 + 32);
+
+enum : uint32_t { kLightTriangle, kLightPoint, kLightSpot, kLightDirectional, kLightEnv, kLightConstant };
+
+float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+
+template <class T>
+std::shared_ptr<gpu::Buffer> upload(gpu::Context& gpu, const std::vector<T>& data,
+                                    const std::string& name) {
+    auto buf = gpu.createBuffer(std::max<size_t>(data.size() * sizeof(T), 16), name);
+    if (!data.empty()) gpu.uploadBuffer(*buf, data.data(), data.size() * sizeof(T));
+    return buf;
+}
+
+}  // namespace
+
+struct SceneGpu::Impl {
+    std::shared_ptr<gpu::Buffer> vertices, triangles, shapes, materials, textures, texels,
+        lights, lightCdf, info, envDistribution;
+    BvhGpu bvh;
+    SceneInfoGpu infoData{};
+    std::vector<EnvMapDistribution> envs;
+};
+
+SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
+    : mImpl(std::make_unique<Impl>()), mGpu(gpu), mScene(std::move(sceneIn)) {
+    auto t0 = std::chrono::steady_clock::now();
+    const Scene& s = mScene;
+
+    // Flatten shapes into world-space triangles, contiguous per shape.
+    std::vector<VertexGpu> vertices;
+    std::vector<glm::uvec4> triangles;
+    std::vector<glm::vec3> positions;
+    std::vector<glm::uvec3> indices;
+    std::vector<uint32_t> masks;
+    std::vector<ShapeGpu> shapes;
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (size_t si = 0; si < s.shapes.size(); ++si) {
+        const Shape& shape = s.shapes[si];
+        if (shape.mesh < 0 || size_t(shape.mesh) >= s.meshes.size())
+            throw UserError("scene '" + s.sourceFile + "': shape '" + shape.name +
+                            "' has no mesh");
+        const Mesh& mesh = s.meshes[shape.mesh];
+        ShapeGpu sg{};
+        sg.material = shape.material < 0 ? 0u : uint32_t(shape.material);
+        sg.flags = shape.flags;
+        sg.lightOffset = ~0u;
+        sg.firstTriangle = uint32_t(triangles.size());
+        sg.emission = glm::vec4(shape.emission, mesh.uvs.empty() ? 0.0f : 1.0f);
+        shapes.push_back(sg);
+        glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(shape.toWorld)));
+        uint32_t base = uint32_t(vertices.size());
+        for (size_t v = 0; v < mesh.positions.size(); ++v) {
+            glm::vec3 p = glm::vec3(shape.toWorld * glm::vec4(mesh.positions[v], 1.0f));
+            glm::vec3 n(0.0f);
+            if (!mesh.faceNormals && v < mesh.normals.size()) {
+                n = normalMatrix * mesh.normals[v];
+                float len = glm::length(n);
+                n = len > 0.0f ? n / len : glm::vec3(0.0f);
+            }
+            glm::vec2 uv = v < mesh.uvs.size() ? mesh.uvs[v] : glm::vec2(0.0f);
+            vertices.push_back({glm::vec4(p, uv.x), glm::vec4(n, uv.y)});
+            positions.push_back(p);
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+        }
+        for (const auto& tri : mesh.indices) {
+            triangles.push_back(glm::uvec4(tri + base, uint32_t(si)));
+            indices.push_back(tri + base);
+            // BVH mask bits: visibility and caustic flags (low 6 bits) | user mask bits.
+            masks.push_back((shape.flags & 0x3fu) | ((shape.rayMask & 0x3u) << 6));
+        }
+    }
+    if (triangles.empty()) throw UserError("scene '" + s.sourceFile + "' has no triangles");
+    glm::vec3 center = 0.5f * (lo + hi);
+    float radius = 0.5f * glm::length(hi - lo);
+    mBounds = glm::vec4(center, radius);
+
+    // Materials (a default diffuse when the scene has none).
+    std::vector<MaterialGpu> materials;
+    for (const auto& m : s.materials) materials.push_back(packMaterial(m));
+    if (materials.empty()) materials.push_back(packMaterial(Material{}));
+
+    // Textures: all texels in one buffer.
+    std::vector<TextureGpu> textures;
+    std::vector<glm::vec4> texels;
+    for (const auto& t : s.textures) {
+        TextureGpu tg{};
+        tg.offset = uint32_t(texels.size());
+        tg.kind = uint32_t(t.kind);
+        tg.color0 = glm::vec4(t.color0, 1.0f);
+        tg.color1 = glm::vec4(t.color1, 1.0f);
+        tg.uvScale = glm::vec4(t.uvScale, 0.0f, 0.0f);
+        if (t.kind == TextureKind::Bitmap) {
+            tg.width = t.width;
+            tg.height = t.height;
+            for (size_t i = 0; i + 3 < t.rgba.size(); i += 4)
+                texels.emplace_back(t.rgba[i], t.rgba[i + 1], t.rgba[i + 2], t.rgba[i + 3]);
+            if (texels.size() - tg.offset != size_t(t.width) * t.height)
+                throw UserError("texture '" + t.name + "' has no texel data");
+        }
+        textures.push_back(tg);
+    }
+
+    // Light list: emissive triangles (power = pi * L * area, one-sided), then analytic lights.
+    std::vector<LightGpu> lights;
+    std::vector<float> power;
+    for (size_t si = 0; si < s.shapes.size(); ++si) {
+        const Shape& shape = s.shapes[si];
+        if (luminance(shape.emission) <= 0.0f) continue;
+        shapes[si].lightOffset = uint32_t(lights.size());
+        uint32_t first = shapes[si].firstTriangle;
+        uint32_t count = uint32_t(s.meshes[shape.mesh].indices.size());
+        for (uint32_t t = first; t < first + count; ++t) {
+            glm::uvec4 tri = triangles[t];
+            float area = 0.5f * glm::length(glm::cross(positions[tri.y] - positions[tri.x],
+                                                       positions[tri.z] - positions[tri.x]));
+            lights.push_back({kLightTriangle, t, 0.0f, 0.0f, {}, {}, {}});
+            power.push_back(float(M_PI) * luminance(shape.emission) * area);
+            ++mStats.emissiveTriangles;
+        }
+    }
+    uint32_t envIndex = ~0u;
+    for (const auto& l : s.lights) {
+        LightGpu lg{};
+        float p = 0.0f;
+        float discArea = float(M_PI) * radius * radius;
+        switch (l.type) {
+            case LightType::Point:
+            case LightType::Spot: {
+                lg.type = l.type == LightType::Point ? kLightPoint : kLightSpot;
+                lg.p0 = glm::vec4(l.position, std::cos(glm::radians(l.beamWidth)));
+                lg.p1 = glm::vec4(l.intensity, 0.0f);
+                lg.p2 = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.cutoffAngle)));
+                p = 4.0f * float(M_PI) * luminance(l.intensity);
+                break;
+            }
+            case LightType::Directional:
+                lg.type = kLightDirectional;
+                lg.p0 = glm::vec4(-glm::normalize(l.direction), 0.0f);  // towards the light
+                lg.p1 = glm::vec4(l.intensity, 0.0f);
+                p = luminance(l.intensity) * discArea;
+                break;
+            case LightType::Constant:
+                lg.type = kLightConstant;
+                lg.p1 = glm::vec4(l.intensity * l.scale, 0.0f);
+                p = float(M_PI) * luminance(l.intensity * l.scale) * discArea;
+                break;
+            case LightType::Environment: {
+                if (l.envTexture < 0 || size_t(l.envTexture) >= s.textures.size())
+                    throw UserError("environment light without a texture");
+                const Texture& tex = s.textures[l.envTexture];
+                lg.type = kLightEnv;
+                lg.index = uint32_t(mImpl->envs.size());
+                lg.p1 = glm::vec4(l.scale, 0.0f, 0.0f, 0.0f);
+                mImpl->envs.push_back(EnvMapDistribution(tex, l.toWorld));
+                p = float(M_PI) * l.scale * mImpl->envs.back().averageLuminance() * discArea;
+                break;
+            }
+        }
+        if (l.type == LightType::Environment || l.type == LightType::Constant) {
+            if (envIndex != ~0u) {
+                logWarning("scene '{}': more than one environment light; using the first",
+                           s.sourceFile);
+                continue;
+            }
+            envIndex = uint32_t(lights.size());
+        }
+        lights.push_back(lg);
+        power.push_back(std::max(p, 0.0f));
+    }
+    // Selection pmf proportional to power; inclusive CDF for the binary search.
+    double total = 0.0;
+    for (float p : power) total += p;
+    std::vector<float> cdf(lights.size());
+    double acc = 0.0;
+    for (size_t i = 0; i < lights.size(); ++i) {
+        lights[i].pmf = total > 0 ? float(power[i] / total) : 1.0f / float(lights.size());
+        acc += lights[i].pmf;
+        cdf[i] = float(acc);
+    }
+    if (!cdf.empty()) cdf.back() = 1.0f;  // guard the last bin against round-off
+
+    auto& g = *mImpl;
+    g.vertices = upload(gpu, vertices, "SceneVertices");
+    g.triangles = upload(gpu, triangles, "SceneTriangles");
+    g.shapes = upload(gpu, shapes, "SceneShapes");
+    g.materials = upload(gpu, materials, "SceneMaterials");
+    g.textures = upload(gpu, textures, "SceneTextures");
+    g.texels = upload(gpu, texels, "SceneTexels");
+    g.lights = upload(gpu, lights, "SceneLights");
+    g.lightCdf = upload(gpu, cdf, "SceneLightCdf");
+    g.info = gpu.createBuffer(sizeof(SceneInfoGpu), "SceneInfoBuffer");
+    g.infoData.counts = glm::uvec4(triangles.size(), shapes.size(), lights.size(), envIndex);
+    g.infoData.boundsCenter = mBounds;
+    g.envDistribution = packEnvMaps(gpu, g.envs);
+
+    BvhBuild build = buildBvh(positions, indices, masks);
+    g.bvh.upload(gpu, build);
+
+    mStats.triangles = triangles.size();
+    mStats.shapes = shapes.size();
+    mStats.materials = materials.size();
+    mStats.textures = textures.size();
+    mStats.lights = lights.size();
+    mStats.bvhNodes = build.stats.nodes;
+    mStats.buildMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    logInfo("scene: {} triangles, {} shapes, {} lights ({} emissive triangles), BVH {} nodes, "
+            "{:.0f} ms",
+            mStats.triangles, mStats.shapes, mStats.lights, mStats.emissiveTriangles,
+            mStats.bvhNodes, mStats.buildMs);
+}
+
+SceneGpu::~SceneGpu() = default;
+
+void SceneGpu::bind(gpu::Bindings& b) const {
+    auto& g = *mImpl;
+    b.set("SceneVertices", g.vertices)
+        .set("SceneTriangles", g.triangles)
+        .set("SceneShapes", g.shapes)
+        .set("SceneMaterials", g.materials)
+        .set("SceneTextures", g.textures)
+        .set("SceneTexels", g.texels)
+        .set("SceneLights", g.lights)
+        .set("SceneLightCdf", g.lightCdf)
+        .set("SceneInfoBuffer", g.info);
+    bindEnvMaps(b, g.envDistribution);
+    g.bvh.bind(b);
+}
+
+void SceneGpu::setCamera(const Camera& camera) {
+    mScene.camera = camera;
+    mCameraDirty = true;
+    ++mRevision;
+}
+
+namespace {
+CameraPoseGpu poseAt(const Camera& base, float time, uint32_t width, uint32_t height) {
+    Camera c = cameraAt(base, time);
+    glm::vec3 origin = glm::vec3(c.toWorld * glm::vec4(0, 0, 0, 1));
+    glm::vec3 forward = glm::normalize(glm::vec3(c.toWorld * glm::vec4(0, 0, 1, 0)));
+    glm::vec3 up = glm::normalize(glm::vec3(c.toWorld * glm::vec4(0, 1, 0, 0)));
+    float aspect = float(width) / float(height);
+    float t = std::tan(glm::radians(c.fov) * 0.5f);
+    float tx, ty;
+    using Axis = Camera::FovAxis;
+    bool xAxis = c.fovAxis == Axis::X || (c.fovAxis == Axis::Smaller && width <= height) ||
+                 (c.fovAxis == Axis::Larger && width >= height);
+    if (xAxis) {
+        tx = t;
+        ty = t / aspect;
+    } else {
+        ty = t;
+        tx = t * aspect;
+    }
+    CameraPoseGpu p;
+    p.origin = glm::vec4(origin, tx);
+    p.target = glm::vec4(origin + forward, ty);
+    p.up = glm::vec4(up, c.type == CameraType::ThinLens ? c.apertureRadius : 0.0f);
+    p.lens = glm::vec4(c.focusDistance, c.shutterClose - c.shutterOpen, float(c.type), 0.0f);
+    return p;
+}
+}  // namespace
+
+void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
+    if (!mCameraDirty && time == mTime && width == mWidth && height == mHeight) return;
+    auto& info = mImpl->infoData;
+    const Camera& c = mScene.camera;
+    CameraPoseGpu prev = mTime < 0.0f ? poseAt(c, time + c.shutterOpen, width, height)
+                                      : info.open;
+    info.open = poseAt(c, time + c.shutterOpen, width, height);
+    info.close = poseAt(c, time + c.shutterClose, width, height);
+    // Previous frame's pose: the last uploaded open pose (same pose on the first frame).
+    info.prev = (mTime < 0.0f || width != mWidth || height != mHeight) ? info.open : prev;
+    mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
+    if (time != mTime || mCameraDirty) ++mRevision;
+    mTime = time;
+    mWidth = width;
+    mHeight = height;
+    mCameraDirty = false;
+}
+
+}  // namespace loom::scene

@@ -1,0 +1,51 @@
+#pragma once
+// The scene on the GPU: world-space triangles (shapes flattened, contiguous per shape), the
+// BVH, materials, textures, the light list with its selection CDF, and per-frame camera poses.
+// GLSL side: shaders/lib/scene.glsl, lights.glsl, bvh.glsl, material.glsl.
+#include <memory>
+#include <string>
+
+#include "core/gpu/Context.h"
+#include "core/scene/Scene.h"
+
+namespace loom::scene {
+
+struct SceneStats {
+    size_t triangles = 0, shapes = 0, materials = 0, textures = 0, lights = 0, emissiveTriangles = 0;
+    size_t bvhNodes = 0;
+    double buildMs = 0.0;
+};
+
+class SceneGpu {
+public:
+    SceneGpu(gpu::Context& gpu, Scene scene);
+    ~SceneGpu();
+
+    // Binds every scene buffer by the GLSL names of the scene libraries.
+    void bind(gpu::Bindings& bindings) const;
+    // Camera poses for frame time t (in frames) at the given aspect ratio; uploads when changed.
+    void setFrame(float time, uint32_t width, uint32_t height);
+    // Replaces the camera (Lua / inspector); bumps revision().
+    void setCamera(const Camera& camera);
+
+    const Scene& cpu() const { return mScene; }
+    const SceneStats& stats() const { return mStats; }
+    // Changes whenever the camera or frame time changes: passes with history reset on it.
+    uint64_t revision() const { return mRevision; }
+    // World-space bounding sphere.
+    glm::vec4 boundingSphere() const { return mBounds; }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+    gpu::Context& mGpu;
+    Scene mScene;
+    SceneStats mStats;
+    glm::vec4 mBounds{0.0f};
+    uint64_t mRevision = 1;
+    float mTime = -1.0f;
+    uint32_t mWidth = 0, mHeight = 0;
+    bool mCameraDirty = true;
+};
+
+}  // namespace loom::scene

@@ -1,0 +1,62 @@
+// PathTracer: the reference estimator (NEE + BSDF sampling with MIS, Russian roulette, thin
+// lens, camera motion blur) with AOVs. See README.md.
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+
+namespace loom {
+
+class PathTracerPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.outputTexture("color", gpu::Format::RGBA32F).doc("radiance, mean of spp samples");
+        r.outputTexture("albedo", gpu::Format::RGBA32F).optional().doc("first-hit reflectance");
+        r.outputTexture("normal", gpu::Format::RGBA32F).optional().doc("first-hit shading normal");
+        r.outputTexture("direct", gpu::Format::RGBA32F)
+            .optional()
+            .doc("emission seen directly + one-bounce lighting");
+        r.outputTexture("indirect", gpu::Format::RGBA32F).optional().doc("color - direct");
+        r.param("samplesPerPixel", 1).range(1, 4096).doc("paths per pixel per frame");
+        r.param("maxBounces", 9).range(0, 64).doc("scattering events per path (1 = direct only)");
+        r.param("rrDepth", 5).range(1, 64).doc("Russian roulette after this many bounces");
+        r.paramEnum("strategy", "mis", {"mis", "bsdf", "nee"})
+            .doc("NEE+BSDF with MIS, BSDF sampling only, or light sampling only");
+        r.paramEnum("misHeuristic", "power", {"balance", "power"}).doc("Veach 1997 Sec. 9.2");
+        r.param("motionBlur", true).doc("sample time over the camera shutter");
+        r.param("clamp", 0.0).min(0).doc("clamp path radiance (0 = off; biased, previews only)");
+    }
+    void execute(ExecuteContext& ctx) override {
+        const auto& scene = ctx.scene();
+        ShaderDefines defines;
+        for (const char* aov : {"albedo", "normal", "direct", "indirect"}) {
+            std::string name = aov;
+            for (auto& c : name) c = char(std::toupper(c));
+            defines["HAS_" + name] = ctx.has(aov) ? "1" : "0";
+        }
+        auto pipeline = ctx.shaders().pipeline("passes/path_tracer/path_tracer.comp", defines);
+        gpu::Bindings b;
+        scene.bind(b);
+        b.set("colorImage", ctx.texture("color"));
+        for (auto [port, glsl] : {std::pair{"albedo", "albedoImage"}, {"normal", "normalImage"},
+                                  {"direct", "directImage"}, {"indirect", "indirectImage"}})
+            if (ctx.has(port)) b.set(glsl, ctx.texture(port));
+        gpu::PushConstants pc(*pipeline);
+        uint32_t size[2] = {ctx.width(), ctx.height()};
+        std::string strategy = param<std::string>("strategy");
+        pc.setUints("frameSize", size, 2)
+            .set("frameIndex", uint32_t(ctx.frameIndex()))
+            .set("seed", ctx.seed())
+            .set("spp", uint32_t(param<int>("samplesPerPixel")))
+            .set("maxBounces", uint32_t(param<int>("maxBounces")))
+            .set("rrDepth", uint32_t(param<int>("rrDepth")))
+            .set("strategy", uint32_t(strategy == "mis" ? 0 : strategy == "bsdf" ? 1 : 2))
+            .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
+            .set("motionBlur", uint32_t(param<bool>("motionBlur")))
+            .set("clampValue", float(param<double>("clamp")));
+        ctx.cmd().dispatchThreads(*pipeline, b, &pc, ctx.width(), ctx.height());
+    }
+};
+
+LOOM_REGISTER_PASS(PathTracerPass, "PathTracer",
+                   "Reference path tracer: NEE + BSDF sampling with MIS, RR, DOF, motion blur");
+
+}  // namespace loom

@@ -1,0 +1,51 @@
+// GPU material record, mirrored by core/scene/MaterialGpu.h (std430, 112 bytes, seven 16-byte
+// slots; packMaterial fills it). Textures are resolved by the caller: it overwrites
+// diffuse.rgb (reflectance texture) and specular.rgb (specular texture) with the texels before
+// calling the BSDF.
+#ifndef LOOM_MATERIAL_GLSL
+#define LOOM_MATERIAL_GLSL
+
+// Same order as loom::scene::BsdfType.
+const uint MATERIAL_DIFFUSE = 0u;
+const uint MATERIAL_DIELECTRIC = 1u;
+const uint MATERIAL_ROUGH_DIELECTRIC = 2u;
+const uint MATERIAL_CONDUCTOR = 3u;
+const uint MATERIAL_ROUGH_CONDUCTOR = 4u;
+const uint MATERIAL_PLASTIC = 5u;
+const uint MATERIAL_ROUGH_PLASTIC = 6u;
+const uint MATERIAL_NULL = 7u;
+
+// info.y bits.
+const uint MATERIAL_FLAG_TWO_SIDED = 1u;
+const uint MATERIAL_FLAG_BECKMANN = 2u;   // else GGX
+const uint MATERIAL_FLAG_NONLINEAR = 4u;  // (rough)plastic 'nonlinear' (Mitsuba)
+
+const uint MATERIAL_NO_TEXTURE = 0xffffffffu;
+
+struct Material {
+    vec4 diffuse;        // rgb diffuse reflectance, a microfacet alpha
+    vec4 specular;       // rgb specular reflectance, a eta = int_ior / ext_ior
+    vec4 transmittance;  // rgb specular transmittance, a plastic Fdr_int (see packMaterial)
+    vec4 cond_eta;       // rgb conductor eta (relative to the exterior), a unused
+    vec4 cond_k;         // rgb conductor k, a unused
+    uvec4 info;          // x type, y flags, zw reserved
+    uvec4 textures;      // x reflectance, y specular reflectance, z normal map, w reserved
+};
+
+uint material_type(Material m) { return m.info.x; }
+bool material_two_sided(Material m) { return (m.info.y & MATERIAL_FLAG_TWO_SIDED) != 0u; }
+bool material_nonlinear(Material m) { return (m.info.y & MATERIAL_FLAG_NONLINEAR) != 0u; }
+// MICROFACET_GGX (0) or MICROFACET_BECKMANN (1), see microfacet.glsl.
+uint material_distribution(Material m) {
+    return (m.info.y & MATERIAL_FLAG_BECKMANN) != 0u ? 1u : 0u;
+}
+float material_alpha(Material m) { return m.diffuse.a; }
+float material_eta(Material m) { return m.specular.a; }
+// Hemispherical average of the internal Fresnel reflectance of the coat, Fdr(1 / eta).
+float material_fdr_int(Material m) { return m.transmittance.a; }
+// Texture indices, MATERIAL_NO_TEXTURE when constant.
+uint material_reflectance_texture(Material m) { return m.textures.x; }
+uint material_specular_texture(Material m) { return m.textures.y; }
+uint material_normal_map(Material m) { return m.textures.z; }
+
+#endif

@@ -1,0 +1,135 @@
+// The scene on the GPU (uploaded by core/scene/SceneGpu.cpp; layouts mirrored there):
+// vertices, triangles, shapes, textures, the light list and the camera.
+#ifndef LOOM_SCENE_GLSL
+#define LOOM_SCENE_GLSL
+
+#include "lib/camera.glsl"
+#include "lib/sampling.glsl"
+
+struct VertexGpu {
+    vec4 position_u;  // xyz, uv.x
+    vec4 normal_v;    // xyz (0 = none), uv.y
+};
+struct ShapeGpu {
+    uint material;
+    uint flags;           // scene::ShapeFlags
+    uint light_offset;    // index of this shape's first triangle in the light list, or ~0u
+    uint first_triangle;  // triangles of a shape are contiguous
+    vec4 emission;        // rgb radiance, w = 1 when the shape has UVs
+};
+struct TextureGpu {
+    uint offset;  // first texel in scene_texels
+    uint width;
+    uint height;
+    uint kind;    // 0 bitmap, 1 checkerboard, 2 constant
+    vec4 color0;
+    vec4 color1;
+    vec4 uv_scale;  // xy
+};
+// One entry per light: emissive triangles first, then point/spot/directional/environment.
+struct LightGpu {
+    uint type;   // LIGHT_*
+    uint index;  // triangle id / texture id
+    float pmf;   // selection probability
+    float pad;
+    vec4 p0;     // point/spot: position; directional: direction towards the light
+    vec4 p1;     // intensity (point/spot, W/sr), irradiance (directional), scale (env)
+    vec4 p2;     // spot: axis xyz, w = cos(cutoff); p0.w = cos(beam width)
+};
+const uint LIGHT_TRIANGLE = 0u;
+const uint LIGHT_POINT = 1u;
+const uint LIGHT_SPOT = 2u;
+const uint LIGHT_DIRECTIONAL = 3u;
+const uint LIGHT_ENVIRONMENT = 4u;
+const uint LIGHT_CONSTANT = 5u;
+
+struct SceneInfo {
+    CameraPose camera_open;   // this frame, shutter open
+    CameraPose camera_close;  // this frame, shutter close
+    CameraPose camera_prev;   // previous frame (shutter open)
+    uvec4 counts;             // triangles, shapes, lights, environment light index (~0u: none)
+    vec4 bounds_center;       // xyz, w = bounding-sphere radius
+};
+
+layout(std430) readonly buffer SceneVertices { VertexGpu scene_vertices[]; };
+layout(std430) readonly buffer SceneTriangles { uvec4 scene_triangles[]; };  // v0, v1, v2, shape
+layout(std430) readonly buffer SceneShapes { ShapeGpu scene_shapes[]; };
+layout(std430) readonly buffer SceneTextures { TextureGpu scene_textures[]; };
+layout(std430) readonly buffer SceneTexels { vec4 scene_texels[]; };
+layout(std430) readonly buffer SceneLights { LightGpu scene_lights[]; };
+layout(std430) readonly buffer SceneLightCdf { float scene_light_cdf[]; };  // inclusive prefix
+layout(std430) readonly buffer SceneInfoBuffer { SceneInfo scene_info; };
+
+// Bilinear texture lookup with wrap-around (uv origin at the top-left texel row 0).
+vec4 texture_fetch(uint tex, vec2 uv) {
+    TextureGpu t = scene_textures[tex];
+    uv *= t.uv_scale.xy;
+    if (t.kind == 2u) return t.color0;
+    if (t.kind == 1u) {
+        // Mitsuba checkerboard: alternate in each half of the unit square.
+        vec2 f = fract(uv);
+        return ((f.x < 0.5) == (f.y < 0.5)) ? t.color0 : t.color1;
+    }
+    vec2 st = fract(uv) * vec2(t.width, t.height) - 0.5;
+    ivec2 i0 = ivec2(floor(st));
+    vec2 w = st - vec2(i0);
+    ivec2 size = ivec2(t.width, t.height);
+    ivec2 a = (i0 % size + size) % size, b = (a + 1) % size;
+    vec4 t00 = scene_texels[t.offset + uint(a.y * size.x + a.x)];
+    vec4 t10 = scene_texels[t.offset + uint(a.y * size.x + b.x)];
+    vec4 t01 = scene_texels[t.offset + uint(b.y * size.x + a.x)];
+    vec4 t11 = scene_texels[t.offset + uint(b.y * size.x + b.x)];
+    return mix(mix(t00, t10, w.x), mix(t01, t11, w.x), w.y);
+}
+
+struct SurfacePoint {
+    vec3 p;
+    vec3 ng;       // geometric normal (unnormalised winding order, normalised)
+    vec3 ns;       // shading normal (interpolated; = ng without vertex normals)
+    vec3 dpdu;     // tangent from UVs (or an arbitrary tangent)
+    vec2 uv;
+    uint shape;
+    uint prim;
+    float area;    // triangle area
+};
+
+void triangle_positions(uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
+    uvec4 tri = scene_triangles[prim];
+    p0 = scene_vertices[tri.x].position_u.xyz;
+    p1 = scene_vertices[tri.y].position_u.xyz;
+    p2 = scene_vertices[tri.z].position_u.xyz;
+}
+
+SurfacePoint surface_point(uint prim, vec2 bary) {
+    uvec4 tri = scene_triangles[prim];
+    VertexGpu v0 = scene_vertices[tri.x], v1 = scene_vertices[tri.y], v2 = scene_vertices[tri.z];
+    float b0 = 1.0 - bary.x - bary.y;
+    SurfacePoint s;
+    s.prim = prim;
+    s.shape = tri.w;
+    s.p = b0 * v0.position_u.xyz + bary.x * v1.position_u.xyz + bary.y * v2.position_u.xyz;
+    vec3 e1 = v1.position_u.xyz - v0.position_u.xyz, e2 = v2.position_u.xyz - v0.position_u.xyz;
+    vec3 c = cross(e1, e2);
+    s.area = 0.5 * length(c);
+    s.ng = normalize(c);
+    vec2 uv0 = vec2(v0.position_u.w, v0.normal_v.w), uv1 = vec2(v1.position_u.w, v1.normal_v.w),
+         uv2 = vec2(v2.position_u.w, v2.normal_v.w);
+    s.uv = b0 * uv0 + bary.x * uv1 + bary.y * uv2;
+    vec3 n = b0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz;
+    s.ns = dot(n, n) > 0.0 ? normalize(n) : s.ng;
+    // Keep the geometric normal on the side of the shading normal (consistent orientation).
+    if (dot(s.ng, s.ns) < 0.0) s.ng = -s.ng;
+    // Tangent from the UV parameterisation (pbrt-v4 Triangle::InteractionFromIntersection).
+    vec2 duv1 = uv1 - uv0, duv2 = uv2 - uv0;
+    float det = duv1.x * duv2.y - duv1.y * duv2.x;
+    if (abs(det) > 1e-12) {
+        s.dpdu = (duv2.y * e1 - duv1.y * e2) / det;
+    } else {
+        vec3 t, b;
+        orthonormal_basis(s.ns, t, b);
+        s.dpdu = t;
+    }
+    return s;
+}
+
+#endif

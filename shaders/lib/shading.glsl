@@ -1,0 +1,65 @@
+// From a BVH hit to everything a shading kernel needs: the surface point, the material with
+// its textures resolved, and the (normal-mapped) shading frame.
+#ifndef LOOM_SHADING_GLSL
+#define LOOM_SHADING_GLSL
+
+#include "lib/bvh.glsl"
+#include "lib/material.glsl"
+#include "lib/scene.glsl"
+
+layout(std430) readonly buffer SceneMaterials { Material scene_materials[]; };
+
+struct ShadingPoint {
+    SurfacePoint sp;
+    vec3 n;         // shading normal (after normal mapping)
+    vec3 t, b;      // shading frame tangents
+    Material mat;
+    uint shape_flags;
+    vec3 emission;  // shape radiance (0 when not a light)
+};
+
+vec3 shading_to_local(ShadingPoint s, vec3 w) { return vec3(dot(w, s.t), dot(w, s.b), dot(w, s.n)); }
+vec3 shading_to_world(ShadingPoint s, vec3 w) { return w.x * s.t + w.y * s.b + w.z * s.n; }
+
+ShadingPoint shading_point(Hit hit) {
+    ShadingPoint s;
+    s.sp = surface_point(hit.prim, hit.bary);
+    ShapeGpu shape = scene_shapes[s.sp.shape];
+    s.shape_flags = shape.flags;
+    s.emission = shape.emission.rgb;
+    s.mat = scene_materials[shape.material];
+    uint tex = material_reflectance_texture(s.mat);
+    if (tex != MATERIAL_NO_TEXTURE) s.mat.diffuse.rgb = texture_fetch(tex, s.sp.uv).rgb;
+    s.n = s.sp.ns;
+    // Tangent frame from dp/du, Gram-Schmidt against the shading normal.
+    vec3 t = s.sp.dpdu - s.n * dot(s.n, s.sp.dpdu);
+    float len = length(t);
+    if (len > 1e-12) {
+        s.t = t / len;
+        s.b = cross(s.n, s.t);
+    } else {
+        orthonormal_basis(s.n, s.t, s.b);
+    }
+    uint nmap = material_normal_map(s.mat);
+    if (nmap != MATERIAL_NO_TEXTURE) {
+        // Tangent-space normal map (Mitsuba normalmap): n = 2 rgb - 1 in (dp/du, n x dp/du, n).
+        vec3 nt = 2.0 * texture_fetch(nmap, s.sp.uv).rgb - 1.0;
+        vec3 n = normalize(nt.x * s.t + nt.y * s.b + nt.z * s.n);
+        if (!any(isnan(n)) && !any(isinf(n))) {
+            s.n = n;
+            vec3 t2 = s.t - s.n * dot(s.n, s.t);
+            s.t = normalize(t2);
+            s.b = cross(s.n, s.t);
+        }
+    }
+    return s;
+}
+
+// Origin offset along the geometric normal to the side of `dir`, scaled with the magnitude of
+// p so self-intersection is avoided at any scene scale.
+vec3 offset_ray_origin(vec3 p, vec3 ng, vec3 dir) {
+    float eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
+    return p + (dot(ng, dir) >= 0.0 ? eps : -eps) * ng;
+}
+
+#endif

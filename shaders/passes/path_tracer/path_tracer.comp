@@ -1,0 +1,165 @@
+#version 460
+// Reference unidirectional path tracer: BSDF sampling and next-event estimation combined by
+// MIS (Veach 1997), Russian roulette, thin lens, motion blur over the shutter. The baseline
+// every other estimator is tested against, so each strategy can be switched off.
+#include "lib/bsdf.glsl"
+#include "lib/camera.glsl"
+#include "lib/lights.glsl"
+#include "lib/mis.glsl"
+#include "lib/rng.glsl"
+#include "lib/shading.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f) uniform writeonly image2D colorImage;
+#if HAS_ALBEDO
+layout(rgba32f) uniform writeonly image2D albedoImage;
+#endif
+#if HAS_NORMAL
+layout(rgba32f) uniform writeonly image2D normalImage;
+#endif
+#if HAS_DIRECT
+layout(rgba32f) uniform writeonly image2D directImage;
+#endif
+#if HAS_INDIRECT
+layout(rgba32f) uniform writeonly image2D indirectImage;
+#endif
+
+const uint STRATEGY_MIS = 0u;   // NEE + BSDF sampling, MIS
+const uint STRATEGY_BSDF = 1u;  // BSDF sampling only (emitters hit by chance)
+const uint STRATEGY_NEE = 2u;   // light sampling only for non-delta vertices
+
+layout(push_constant) uniform Params {
+    uvec2 frameSize;
+    uint frameIndex;
+    uint seed;
+    uint spp;
+    uint maxBounces;   // scattering events; 1 = direct lighting only
+    uint rrDepth;      // Russian roulette starts after this many bounces
+    uint strategy;
+    uint misHeuristic;
+    uint motionBlur;   // sample time over the shutter
+    float clampValue;  // 0 = off; biased firefly clamp for previews only
+} pc;
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, pc.frameSize))) return;
+    Rng rng = rng_init(pixel, pc.frameIndex, pc.seed);
+
+    vec3 sum = vec3(0.0), sum_direct = vec3(0.0);
+    vec3 first_albedo = vec3(0.0), first_normal = vec3(0.0);
+    for (uint s = 0u; s < pc.spp; ++s) {
+        // Camera ray: jittered film position, lens sample, shutter time.
+        vec2 uv = (vec2(pixel) + rng_next2(rng)) / vec2(pc.frameSize);
+        vec2 u_lens = rng_next2(rng);
+        float shutter = pc.motionBlur != 0u ? rng_next(rng) : 0.0;
+        CameraFrame cam = camera_frame(scene_info.camera_open, scene_info.camera_close, shutter);
+        vec3 o, d;
+        camera_ray(cam, uv, u_lens, o, d);
+
+        vec3 L = vec3(0.0), L_direct = vec3(0.0);
+        vec3 beta = vec3(1.0);
+        float prev_pdf = 0.0;     // solid-angle pdf of the BSDF sample that led here
+        bool prev_delta = true;   // camera rays count as delta (no MIS at the first hit)
+        vec3 prev_p = o;
+        for (uint depth = 0u;; ++depth) {
+            Hit hit;
+            if (!trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit)) {
+                // Environment, MIS-weighted against light sampling of the environment.
+                vec3 Le = environment_radiance(d);
+                if (any(greaterThan(Le, vec3(0.0)))) {
+                    float w = 1.0;
+                    if (!prev_delta && pc.strategy == STRATEGY_MIS)
+                        w = mis_weight(prev_pdf, light_pdf_environment(d), pc.misHeuristic);
+                    else if (!prev_delta && pc.strategy == STRATEGY_NEE)
+                        w = 0.0;
+                    vec3 c = beta * Le * w;
+                    L += c;
+                    if (depth <= 1u) L_direct += c;
+                }
+                break;
+            }
+            ShadingPoint sh = shading_point(hit);
+            if (depth == 0u) {
+                first_albedo += sh.mat.diffuse.rgb;
+                first_normal += sh.n;
+            }
+            // Emission hit by BSDF sampling (or seen directly).
+            if (any(greaterThan(sh.emission, vec3(0.0)))) {
+                vec3 Le = emitted_radiance(sh.sp.shape, sh.sp.ng, d);
+                float w = 1.0;
+                if (!prev_delta && pc.strategy == STRATEGY_MIS)
+                    w = mis_weight(prev_pdf, light_pdf_triangle(prev_p, hit.prim, sh.sp.p, sh.sp.ng),
+                                   pc.misHeuristic);
+                else if (!prev_delta && pc.strategy == STRATEGY_NEE)
+                    w = 0.0;
+                vec3 c = beta * Le * w;
+                L += c;
+                if (depth <= 1u) L_direct += c;
+            }
+            if (depth >= pc.maxBounces) break;
+
+            vec3 wo = shading_to_local(sh, -d);
+            uint flags = bsdf_flags(sh.mat);
+            bool has_smooth = (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
+
+            // Next-event estimation.
+            vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
+            if (has_smooth && pc.strategy != STRATEGY_BSDF) {
+                LightSample ls = sample_light(sh.sp.p, u_light);
+                if (ls.pdf > 0.0 && any(greaterThan(ls.Li, vec3(0.0)))) {
+                    vec3 wi = shading_to_local(sh, ls.wi);
+                    vec3 f = bsdf_eval(sh.mat, wo, wi);
+                    if (any(greaterThan(f, vec3(0.0)))) {
+                        vec3 so = offset_ray_origin(sh.sp.p, sh.sp.ng, ls.wi);
+                        float tmax = ls.dist < 1e29 ? ls.dist * (1.0 - 1e-4) : 1e30;
+                        if (!trace_any(so, ls.wi, 0.0, tmax, BVH_MASK_ALL)) {
+                            float w = 1.0;
+                            if (!ls.is_delta && pc.strategy == STRATEGY_MIS)
+                                w = mis_weight(ls.pdf, bsdf_pdf(sh.mat, wo, wi), pc.misHeuristic);
+                            vec3 c = beta * f * ls.Li * (w / ls.pdf);
+                            L += c;
+                            if (depth == 0u) L_direct += c;
+                        }
+                    }
+                }
+            }
+
+            // BSDF sampling.
+            vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+            BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
+            if (!bsdf_sample_valid(bs)) break;
+            beta *= bsdf_sample_weight(bs);
+            prev_delta = (bs.flags & BSDF_DELTA) != 0u;
+            prev_pdf = bs.pdf;
+            prev_p = sh.sp.p;
+            d = shading_to_world(sh, bs.wi);
+            o = offset_ray_origin(sh.sp.p, sh.sp.ng, d);
+
+            // Russian roulette on the throughput (unbiased: survivors are reweighted).
+            if (depth + 1u >= pc.rrDepth) {
+                float q = min(max(beta.r, max(beta.g, beta.b)), 0.95);
+                if (rng_next(rng) >= q) break;
+                beta /= q;
+            }
+            if (all(equal(beta, vec3(0.0)))) break;
+        }
+        if (pc.clampValue > 0.0) L = min(L, vec3(pc.clampValue));
+        sum += L;
+        sum_direct += L_direct;
+    }
+    float inv = 1.0 / float(pc.spp);
+    imageStore(colorImage, ivec2(pixel), vec4(sum * inv, 1.0));
+#if HAS_ALBEDO
+    imageStore(albedoImage, ivec2(pixel), vec4(first_albedo * inv, 1.0));
+#endif
+#if HAS_NORMAL
+    imageStore(normalImage, ivec2(pixel), vec4(first_normal * inv, 1.0));
+#endif
+#if HAS_DIRECT
+    imageStore(directImage, ivec2(pixel), vec4(sum_direct * inv, 1.0));
+#endif
+#if HAS_INDIRECT
+    imageStore(indirectImage, ivec2(pixel), vec4((sum - sum_direct) * inv, 1.0));
+#endif
+}

@@ -1,0 +1,29 @@
+#version 460
+// Traces a buffer of rays through lib/bvh.glsl (tests/gpu/test_bvh.cpp, bench/bench_bvh.cpp).
+// Ray i = (origin, tmin), (direction, tmax); result i = (t, prim, u, v) for closest hit
+// (prim = ~0u on a miss) or (occluded, 0, 0, 0) for any hit.
+#include "lib/bvh.glsl"
+
+layout(local_size_x = 64) in;
+layout(std430) readonly buffer Rays { vec4 data[]; } rays;
+layout(std430) writeonly buffer Results { uvec4 data[]; } results;
+layout(push_constant) uniform Params {
+    uint rayCount;
+    uint mask;
+    uint anyHit;
+} pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.rayCount) return;
+    vec4 a = rays.data[2u * i], b = rays.data[2u * i + 1u];
+    if (pc.anyHit != 0u) {
+        results.data[i] = uvec4(trace_any(a.xyz, b.xyz, a.w, b.w, pc.mask) ? 1u : 0u, 0u, 0u, 0u);
+    } else {
+        Hit hit;
+        bool found = trace_closest(a.xyz, b.xyz, a.w, b.w, pc.mask, hit);
+        results.data[i] = found ? uvec4(floatBitsToUint(hit.t), hit.prim,
+                                        floatBitsToUint(hit.bary))
+                                : uvec4(floatBitsToUint(b.w), 0xffffffffu, 0u, 0u);
+    }
+}

@@ -1,0 +1,856 @@
+// Shading library tests (shaders/lib/{fresnel,microfacet,bsdf}.glsl) on the GPU:
+//  - chi-square goodness of fit of every non-delta sampling routine against its bsdf_pdf
+//    (pbrt-v3 / Mitsuba style: (cos theta, phi) histogram vs the pdf integrated per cell,
+//    low-expectation cells pooled, significance 0.01 with a Sidak correction over all cases),
+//    with the per-sample check that the sampled f and pdf equal bsdf_eval and bsdf_pdf;
+//  - delta lobes against analytic directions, weights and Fresnel choice frequencies;
+//  - Fresnel and microfacet terms against CPU references and normalisation identities;
+//  - white-furnace energy bounds and (generalised) reciprocity.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/gpu/Context.h"
+#include "core/scene/MaterialGpu.h"
+#include "core/shader/ShaderCompiler.h"
+
+namespace {
+
+using namespace loom;
+using scene::BsdfType;
+using scene::Material;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Flags and modes of bsdf.glsl.
+constexpr uint32_t kReflection = 1, kTransmission = 2, kDiffuse = 4, kGlossy = 8, kDelta = 16,
+                   kNull = 32;
+constexpr uint32_t kRadiance = 0, kImportance = 1;
+
+// ---------------------------------------------------------------------------------------------
+// One Vulkan context, compiler and pipeline set shared by every test in this file.
+
+class Gpu {
+public:
+    static Gpu& get() {
+        static Gpu gpu;
+        return gpu;
+    }
+    gpu::Context& ctx() { return *mCtx; }
+    const gpu::ComputePipeline& pipeline(const std::string& kernel) {
+        auto& p = mPipelines[kernel];
+        if (!p) {
+            auto compiled = mCompiler->compile(std::string(LOOM_TEST_DATA) + "/" + kernel);
+            p = mCtx->createPipeline(compiled->spirv, compiled->reflection, kernel);
+        }
+        return *p;
+    }
+    template <class T>
+    std::shared_ptr<gpu::Buffer> upload(const std::vector<T>& data, const std::string& name) {
+        auto buffer = mCtx->createBuffer(data.size() * sizeof(T), name);
+        mCtx->uploadBuffer(*buffer, data.data(), data.size() * sizeof(T));
+        return buffer;
+    }
+    std::shared_ptr<gpu::Buffer> output(size_t count, const std::string& name) {
+        return mCtx->createBuffer(count * sizeof(glm::vec4), name);
+    }
+    std::vector<glm::vec4> download(const gpu::Buffer& buffer, size_t count) {
+        std::vector<glm::vec4> out(count);
+        mCtx->downloadBuffer(buffer, out.data(), count * sizeof(glm::vec4));
+        return out;
+    }
+    void run(const gpu::ComputePipeline& pipe, const gpu::Bindings& bindings,
+             const gpu::PushConstants& push, uint32_t threads) {
+        auto T0 = std::chrono::steady_clock::now();
+        auto cmd = mCtx->beginCommands();
+        cmd->dispatchThreads(pipe, bindings, &push, threads);
+        mCtx->submit(*cmd);
+        std::printf("TIMING dispatch %s %u: %.3f\n", pipe.name().c_str(), threads, std::chrono::duration<double>(std::chrono::steady_clock::now()-T0).count());
+    }
+
+private:
+    Gpu() {
+        mCtx = gpu::Context::create();
+        mCompiler = std::make_unique<ShaderCompiler>(
+            std::vector<std::string>{std::string(LOOM_SOURCE_DIR) + "/shaders", LOOM_TEST_DATA},
+            mCtx->cacheDir());
+    }
+    std::shared_ptr<gpu::Context> mCtx;
+    std::unique_ptr<ShaderCompiler> mCompiler;
+    std::map<std::string, std::shared_ptr<gpu::ComputePipeline>> mPipelines;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Kernel wrappers.
+
+struct SampleBatch {
+    std::vector<glm::vec4> samples;  // wi, pdf
+    std::vector<glm::vec4> values;   // f, flags bits
+    std::vector<glm::vec4> checks;   // bsdf_eval(wi), bsdf_pdf(wi)
+    std::vector<float> etas;         // BsdfSample.eta
+    uint32_t flags(size_t i) const {
+        uint32_t bits;
+        std::memcpy(&bits, &values[i].w, sizeof(bits));
+        return bits;
+    }
+};
+
+SampleBatch sampleBsdf(const Material& material, glm::vec3 wo, uint32_t count, uint32_t mode,
+                       uint32_t seed = 1) {
+    Gpu& g = Gpu::get();
+    const auto& pipe = g.pipeline("bsdf_sample.comp");
+    auto mat = g.upload(std::vector<scene::MaterialGpu>{scene::packMaterial(material)}, "mat");
+    auto samples = g.output(count, "samples"), values = g.output(count, "values"),
+         checks = g.output(count, "checks");
+    auto etas = g.ctx().createBuffer(count * sizeof(float), "etas");
+    gpu::Bindings b;
+    b.set("MaterialBuffer", mat)
+        .set("SampleBuffer", samples)
+        .set("ValueBuffer", values)
+        .set("CheckBuffer", checks)
+        .set("EtaBuffer", etas);
+    gpu::PushConstants pc(pipe);
+    pc.set("wo", &wo.x, 3).set("count", count).set("seed", seed).set("mode", mode);
+    g.run(pipe, b, pc, count);
+    SampleBatch batch{g.download(*samples, count), g.download(*values, count),
+                      g.download(*checks, count), std::vector<float>(count)};
+    g.ctx().downloadBuffer(*etas, batch.etas.data(), count * sizeof(float));
+    return batch;
+}
+
+// bsdf_eval (rgb) and bsdf_pdf (a) for pairs; one wo for all when wos.size() == 1.
+std::vector<glm::vec4> evalBsdf(const Material& material, const std::vector<glm::vec4>& wos,
+                                const std::shared_ptr<gpu::Buffer>& wis, uint32_t count,
+                                uint32_t mode) {
+    Gpu& g = Gpu::get();
+    const auto& pipe = g.pipeline("bsdf_eval.comp");
+    auto mat = g.upload(std::vector<scene::MaterialGpu>{scene::packMaterial(material)}, "mat");
+    auto woBuf = g.upload(wos, "wos");
+    auto out = g.output(count, "results");
+    gpu::Bindings b;
+    b.set("MaterialBuffer", mat).set("WoBuffer", woBuf).set("WiBuffer", wis).set("ResultBuffer",
+                                                                                   out);
+    gpu::PushConstants pc(pipe);
+    pc.set("count", count).set("woCount", uint32_t(wos.size())).set("mode", mode);
+    g.run(pipe, b, pc, count);
+    return g.download(*out, count);
+}
+
+std::vector<glm::vec4> evalBsdf(const Material& material, const std::vector<glm::vec4>& wos,
+                                const std::vector<glm::vec4>& wis, uint32_t mode) {
+    return evalBsdf(material, wos, Gpu::get().upload(wis, "wis"), uint32_t(wis.size()), mode);
+}
+
+glm::vec3 sphericalDirection(double cosTheta, double phi) {
+    const double s = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
+    return glm::vec3(float(s * std::cos(phi)), float(s * std::sin(phi)), float(cosTheta));
+}
+
+// Incident direction at polar angle thetaDeg (> 90: below the surface), fixed azimuth.
+glm::vec3 woAt(double thetaDeg) {
+    return sphericalDirection(std::cos(thetaDeg * kPi / 180.0), 0.3);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Chi-square machinery.
+
+// Regularised upper incomplete gamma Q(a, x) (series / Lentz continued fraction, Numerical
+// Recipes 3rd ed. Sec. 6.2).
+double gammaQ(double a, double x) {
+    if (x <= 0.0) return 1.0;
+    const double lg = std::lgamma(a);
+    if (x < a + 1.0) {
+        double sum = 1.0 / a, term = sum;
+        for (int n = 1; n < 100000; ++n) {
+            term *= x / (a + n);
+            sum += term;
+            if (std::abs(term) < std::abs(sum) * 1e-15) break;
+        }
+        return 1.0 - sum * std::exp(-x + a * std::log(x) - lg);
+    }
+    double b = x + 1.0 - a, c = 1e300, d = 1.0 / b, h = d;
+    for (int i = 1; i < 100000; ++i) {
+        const double an = -i * (i - a);
+        b += 2.0;
+        d = an * d + b;
+        if (std::abs(d) < 1e-300) d = 1e-300;
+        c = b + an / c;
+        if (std::abs(c) < 1e-300) c = 1e-300;
+        d = 1.0 / d;
+        const double del = d * c;
+        h *= del;
+        if (std::abs(del - 1.0) < 1e-15) break;
+    }
+    return std::exp(-x + a * std::log(x) - lg) * h;
+}
+
+// Per-test significance after a Sidak correction over `tests` tests at overall level 0.01.
+double sidak(int tests) { return 1.0 - std::pow(1.0 - 0.01, 1.0 / tests); }
+
+struct Chi2Result {
+    double statistic = 0.0;
+    int dof = 0;
+    double pValue = 0.0;
+    std::string error;  // non-empty: rejected before the statistic (samples in an empty cell)
+};
+
+// pbrt-v3 chi2test: cells sorted by expectation, those below 5 pooled.
+Chi2Result chi2(const std::vector<double>& observed, const std::vector<double>& expected,
+                double sampleCount) {
+    std::vector<size_t> order(observed.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return expected[a] < expected[b]; });
+    constexpr double kMinExpected = 5.0;
+    Chi2Result r;
+    double pooledObs = 0.0, pooledExp = 0.0;
+    for (size_t i : order) {
+        if (expected[i] <= 0.0) {
+            // Rounding can put a handful of samples next to a zero-pdf boundary.
+            if (observed[i] > sampleCount * 1e-5) {
+                r.error = "encountered " + std::to_string(observed[i]) +
+                          " samples in a cell with expected frequency 0";
+                return r;
+            }
+        } else if (expected[i] < kMinExpected ||
+                   (pooledExp > 0.0 && pooledExp < kMinExpected)) {
+            pooledObs += observed[i];
+            pooledExp += expected[i];
+        } else {
+            const double d = observed[i] - expected[i];
+            r.statistic += d * d / expected[i];
+            ++r.dof;
+        }
+    }
+    if (pooledExp > 0.0) {
+        const double d = pooledObs - pooledExp;
+        r.statistic += d * d / pooledExp;
+        ++r.dof;
+    }
+    r.dof -= 1;
+    r.pValue = r.dof > 0 ? gammaQ(0.5 * r.dof, 0.5 * r.statistic) : 1.0;
+    return r;
+}
+
+// (cos theta, phi) histogram grid and its quadrature: every cell is split into kSub x kSub
+// sub-rectangles, each integrated with the 2 x 2 Gauss-Legendre rule (an open rule, so the
+// horizon cos = 0, a cell edge where the pdf jumps, is never evaluated).
+struct SphereGrid {
+    static constexpr int kCos = 40, kPhi = 80, kSub = 6;
+    std::vector<glm::vec4> dirs;
+    std::vector<double> weights;  // d(cos) dphi of each node
+    std::vector<int> cell;
+    std::shared_ptr<gpu::Buffer> buffer;
+
+    static int cellOf(const glm::vec3& w) {
+        const double phi = std::atan2(double(w.y), double(w.x));
+        const int c = std::clamp(int((double(w.z) + 1.0) * 0.5 * kCos), 0, kCos - 1);
+        const int p = std::clamp(int((phi + kPi) / (2.0 * kPi) * kPhi), 0, kPhi - 1);
+        return c * kPhi + p;
+    }
+
+    static SphereGrid& get() {
+        static SphereGrid grid = [] {
+            SphereGrid g;
+            const double gl[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
+            const int nc = kCos * kSub * 2, np = kPhi * kSub * 2;
+            const double dc = 2.0 / (kCos * kSub), dp = 2.0 * kPi / (kPhi * kSub);
+            for (int i = 0; i < nc; ++i) {
+                const double cosT = -1.0 + dc * (i / 2 + gl[i % 2]);
+                for (int j = 0; j < np; ++j) {
+                    const double phi = -kPi + dp * (j / 2 + gl[j % 2]);
+                    g.dirs.emplace_back(sphericalDirection(cosT, phi), 0.0f);
+                    g.weights.push_back(0.25 * dc * dp);
+                    g.cell.push_back((i / (2 * kSub)) * kPhi + j / (2 * kSub));
+                }
+            }
+            g.buffer = Gpu::get().upload(g.dirs, "grid");
+            return g;
+        }();
+        return grid;
+    }
+};
+
+struct Chi2Case {
+    std::string name;
+    Material material;
+    double thetaDeg;  // wo polar angle (> 90: below the surface)
+};
+
+Material makeMaterial(BsdfType type, float alpha = 0.0f,
+                      scene::Microfacet dist = scene::Microfacet::GGX) {
+    Material m;
+    m.type = type;
+    m.alpha = alpha;
+    m.distribution = dist;
+    m.reflectance = glm::vec3(0.6f, 0.45f, 0.2f);
+    m.eta = 1.5f;
+    // Gold at (650, 550, 450) nm, roughly (Mitsuba's Au data).
+    m.conductorEta = glm::vec3(0.143f, 0.374f, 1.442f);
+    m.conductorK = glm::vec3(3.983f, 2.385f, 1.603f);
+    return m;
+}
+
+std::vector<Chi2Case> chi2Cases() {
+    using scene::Microfacet;
+    std::vector<Chi2Case> cases;
+    auto add = [&](const std::string& family, Material m, double theta) {
+        char name[160];
+        std::snprintf(name, sizeof(name), "%s %s a=%.2f theta=%.0f", family.c_str(),
+                      m.distribution == Microfacet::GGX ? "ggx" : "beckmann", m.alpha, theta);
+        cases.push_back({name, m, theta});
+    };
+    add("diffuse", makeMaterial(BsdfType::Diffuse), 30);
+    Material twoSidedDiffuse = makeMaterial(BsdfType::Diffuse);
+    twoSidedDiffuse.twoSided = true;
+    add("diffuse-twosided", twoSidedDiffuse, 120);
+
+    for (auto [a, thetas] : std::vector<std::pair<float, std::vector<double>>>{
+             {0.1f, {0, 45, 85}}, {0.4f, {0, 60, 89}}, {0.9f, {30, 80}}})
+        for (double t : thetas) add("roughconductor", makeMaterial(BsdfType::RoughConductor, a), t);
+    for (auto [a, thetas] : std::vector<std::pair<float, std::vector<double>>>{
+             {0.15f, {30, 80}}, {0.6f, {0, 70}}})
+        for (double t : thetas)
+            add("roughconductor",
+                makeMaterial(BsdfType::RoughConductor, a, Microfacet::Beckmann), t);
+    Material twoSidedConductor = makeMaterial(BsdfType::RoughConductor, 0.3f);
+    twoSidedConductor.twoSided = true;
+    add("roughconductor-twosided", twoSidedConductor, 140);
+
+    // Inside the glass (theta > 90) the critical angle is 41.8 deg: 30 refracts, 60 is TIR.
+    for (auto [a, thetas] : std::vector<std::pair<float, std::vector<double>>>{
+             {0.15f, {20, 75, 150, 120}}, {0.5f, {0, 50, 88, 160, 110}}})
+        for (double t : thetas) add("roughdielectric", makeMaterial(BsdfType::RoughDielectric, a), t);
+    for (double t : {40.0, 130.0})
+        add("roughdielectric",
+            makeMaterial(BsdfType::RoughDielectric, 0.3f, Microfacet::Beckmann), t);
+
+    for (double t : {10.0, 80.0}) add("plastic", makeMaterial(BsdfType::Plastic), t);
+    for (auto [a, thetas] : std::vector<std::pair<float, std::vector<double>>>{
+             {0.2f, {30, 85}}, {0.6f, {60}}})
+        for (double t : thetas) add("roughplastic", makeMaterial(BsdfType::RoughPlastic, a), t);
+    add("roughplastic", makeMaterial(BsdfType::RoughPlastic, 0.3f, Microfacet::Beckmann), 45);
+    return cases;
+}
+
+struct SamplingReport {
+    Chi2Result chi2;
+    size_t checked = 0;        // non-delta samples compared with eval / pdf
+    size_t mismatched = 0;     // ... whose weight or pdf differs by more than 1e-4 (relative)
+    double maxWeightError = 0.0, maxPdfError = 0.0;
+    size_t badEta = 0;         // samples whose BsdfSample.eta is wrong
+};
+
+constexpr uint32_t kChi2Samples = 1u << 20;
+
+// Histogram of the sampled non-delta directions vs N * integral of bsdf_pdf over each cell.
+// Samples that failed or chose a delta lobe form one more cell, expected N (1 - integral).
+SamplingReport runSamplingCase(const Chi2Case& c) {
+    const glm::vec3 wo = woAt(c.thetaDeg);
+    auto T0 = std::chrono::steady_clock::now();
+    const SampleBatch batch = sampleBsdf(c.material, wo, kChi2Samples, kRadiance);
+    auto T1 = std::chrono::steady_clock::now();
+    SphereGrid& grid = SphereGrid::get();
+    auto T2 = std::chrono::steady_clock::now();
+    const auto pdfs = evalBsdf(c.material, {glm::vec4(wo, 0.0f)}, grid.buffer,
+                               uint32_t(grid.dirs.size()), kRadiance);
+    auto T3 = std::chrono::steady_clock::now();
+    std::printf("TIMING sample %.3f grid %.3f pdf %.3f\n", std::chrono::duration<double>(T1-T0).count(), std::chrono::duration<double>(T2-T1).count(), std::chrono::duration<double>(T3-T2).count());
+
+    const int cells = SphereGrid::kCos * SphereGrid::kPhi;
+    std::vector<double> observed(cells + 1, 0.0), expected(cells + 1, 0.0);
+    SamplingReport report;
+    for (size_t i = 0; i < batch.samples.size(); ++i) {
+        const glm::vec4 s = batch.samples[i];
+        if (!(s.w > 0.0f) || (batch.flags(i) & kDelta)) {
+            observed[cells] += 1.0;
+            continue;
+        }
+        const glm::vec3 wi(s);
+        observed[SphereGrid::cellOf(wi)] += 1.0;
+        // Sampled f and pdf must be bsdf_eval and bsdf_pdf at wi: compare pdfs and f / pdf.
+        const glm::vec4 chk = batch.checks[i];
+        const double pdfErr = std::abs(double(chk.w) - s.w) / s.w;
+        double wErr = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const double ws = double(batch.values[i][k]) / s.w;
+            const double we = chk.w > 0.0f ? double(chk[k]) / chk.w : 0.0;
+            wErr = std::max(wErr, std::abs(ws - we) / std::max(std::abs(we), 1e-2));
+        }
+        // BsdfSample.eta: the IOR ratio crossed along wi, 1 for reflection.
+        const double etaExpected = (batch.flags(i) & kTransmission)
+                                       ? (wo.z > 0.0f ? c.material.eta : 1.0 / c.material.eta)
+                                       : 1.0;
+        if (std::abs(batch.etas[i] - etaExpected) > 1e-6) ++report.badEta;
+        ++report.checked;
+        report.maxPdfError = std::max(report.maxPdfError, pdfErr);
+        report.maxWeightError = std::max(report.maxWeightError, wErr);
+        if (!(pdfErr <= 1e-4) || !(wErr <= 1e-4)) ++report.mismatched;
+    }
+    double total = 0.0;
+    for (size_t i = 0; i < grid.dirs.size(); ++i) {
+        const double e = double(kChi2Samples) * pdfs[i].w * grid.weights[i];
+        expected[grid.cell[i]] += e;
+        total += e;
+    }
+    expected[cells] = std::max(0.0, double(kChi2Samples) - total);
+    report.chi2 = chi2(observed, expected, kChi2Samples);
+    if (std::getenv("CHI2_DEBUG")) {
+        std::vector<int> idx(cells + 1);
+        std::iota(idx.begin(), idx.end(), 0);
+        auto contrib = [&](int i) { return expected[i] > 0 ? (observed[i]-expected[i])*(observed[i]-expected[i])/expected[i] : observed[i]; };
+        std::sort(idx.begin(), idx.end(), [&](int a, int b) { return contrib(a) > contrib(b); });
+        for (int k = 0; k < 12; ++k) { int i = idx[k]; std::printf("  cell cos=%d phi=%d obs=%.0f exp=%.1f contrib=%.1f\n", i / SphereGrid::kPhi, i % SphereGrid::kPhi, observed[i], expected[i], contrib(i)); }
+        std::printf("  total expected %.1f residual obs %.0f exp %.1f\n", total, observed[cells], expected[cells]);
+    }
+    return report;
+}
+
+void runChi2Family(const std::string& family) {
+    const auto cases = chi2Cases();
+    const double alpha = sidak(int(cases.size()));
+    int run = 0;
+    for (const auto& c : cases) {
+        if (c.name.rfind(family + " ", 0) != 0) continue;
+        ++run;
+        SCOPED_TRACE(c.name);
+        const SamplingReport r = runSamplingCase(c);
+        std::printf("[chi2] %-44s chi2=%9.1f dof=%4d p=%.4f  (weight err %.1e, pdf err %.1e)\n",
+                    c.name.c_str(), r.chi2.statistic, r.chi2.dof, r.chi2.pValue,
+                    r.maxWeightError, r.maxPdfError);
+        EXPECT_TRUE(r.chi2.error.empty()) << r.chi2.error;
+        EXPECT_GE(r.chi2.pValue, alpha)
+            << "chi2 rejects the sampling routine: chi2 " << r.chi2.statistic << ", dof "
+            << r.chi2.dof << ", p " << r.chi2.pValue << " < " << alpha;
+        EXPECT_GT(r.checked, kChi2Samples / 4) << "too few valid non-delta samples";
+        EXPECT_EQ(r.badEta, 0u) << "BsdfSample.eta differs from the crossed IOR ratio";
+        EXPECT_EQ(r.mismatched, 0u) << "sampled f/pdf differ from bsdf_eval/bsdf_pdf: max "
+                                       "weight error "
+                                    << r.maxWeightError << ", max pdf error " << r.maxPdfError;
+    }
+    EXPECT_GT(run, 0) << "no chi2 case for " << family;
+}
+
+TEST(BsdfSampling, Diffuse) { runChi2Family("diffuse"); }
+TEST(BsdfSampling, DiffuseTwoSided) { runChi2Family("diffuse-twosided"); }
+TEST(BsdfSampling, RoughConductor) { runChi2Family("roughconductor"); }
+TEST(BsdfSampling, RoughConductorTwoSided) { runChi2Family("roughconductor-twosided"); }
+TEST(BsdfSampling, RoughDielectric) { runChi2Family("roughdielectric"); }
+TEST(BsdfSampling, Plastic) { runChi2Family("plastic"); }
+TEST(BsdfSampling, RoughPlastic) { runChi2Family("roughplastic"); }
+
+// ---------------------------------------------------------------------------------------------
+// Delta lobes: analytic directions, weights and choice frequencies.
+
+// Two-sided p-value of a binomial count against probability p (normal approximation).
+double binomialPValue(double hits, double n, double p) {
+    const double sd = std::sqrt(n * p * (1.0 - p));
+    if (sd == 0.0) return hits == n * p ? 1.0 : 0.0;
+    return std::erfc(std::abs(hits - n * p) / sd / std::sqrt(2.0));
+}
+
+// Conductor Fresnel from the complex IOR n = eta + i k (Born & Wolf), in double.
+double fresnelConductorReference(double cosI, double eta, double k) {
+    using C = std::complex<double>;
+    const C n(eta, k);
+    const double sin2 = 1.0 - cosI * cosI;
+    const C cosT = std::sqrt(n * n - sin2);  // n cos(theta_t)
+    const C rs = (cosI - cosT) / (cosI + cosT);
+    const C rp = (n * n * cosI - cosT) / (n * n * cosI + cosT);
+    return 0.5 * (std::norm(rs) + std::norm(rp));
+}
+
+TEST(BsdfDelta, SmoothConductor) {
+    Material m = makeMaterial(BsdfType::Conductor);
+    m.specularReflectance = glm::vec3(0.9f, 0.8f, 0.7f);
+    for (double theta : {0.0, 30.0, 60.0, 85.0, 89.5}) {
+        SCOPED_TRACE(theta);
+        const glm::vec3 wo = woAt(theta);
+        const auto b = sampleBsdf(m, wo, 256, kRadiance);
+        for (size_t i = 0; i < b.samples.size(); ++i) {
+            ASSERT_EQ(b.flags(i), kReflection | kDelta);
+            EXPECT_EQ(b.samples[i].w, 1.0f);
+            EXPECT_NEAR(b.samples[i].x, -wo.x, 1e-6);
+            EXPECT_NEAR(b.samples[i].y, -wo.y, 1e-6);
+            EXPECT_NEAR(b.samples[i].z, wo.z, 1e-6);
+            for (int k = 0; k < 3; ++k) {
+                const double F = fresnelConductorReference(wo.z, m.conductorEta[k],
+                                                           m.conductorK[k]);
+                EXPECT_NEAR(b.values[i][k], m.specularReflectance[k] * F, 1e-4);
+            }
+            // Delta lobes are invisible to bsdf_eval and bsdf_pdf.
+            EXPECT_EQ(b.checks[i], glm::vec4(0.0f));
+        }
+    }
+}
+
+TEST(BsdfDelta, SmoothDielectric) {
+    Material m = makeMaterial(BsdfType::Dielectric);
+    m.specularReflectance = glm::vec3(0.9f, 0.95f, 1.0f);
+    m.specularTransmittance = glm::vec3(0.7f, 0.8f, 0.9f);
+    const std::vector<double> thetas = {0, 30, 60, 85, 170, 140, 135, 110};  // > 90: inside
+    const double alpha = sidak(int(thetas.size()));
+    constexpr uint32_t kN = 1u << 18;
+    for (double theta : thetas) {
+        for (uint32_t mode : {kRadiance, kImportance}) {
+            SCOPED_TRACE(::testing::Message() << "theta " << theta << " mode " << mode);
+            const glm::vec3 wo = woAt(theta);
+            const bool inside = wo.z < 0.0f;
+            const double eta = inside ? 1.0 / m.eta : m.eta;  // IOR ratio across from wo
+            const double cosO = std::abs(double(wo.z));
+            const double F = scene::fresnelDielectric(cosO, eta);
+            // Snell in double: tangential part / eta, on the other side.
+            const double sin2T = (1.0 - cosO * cosO) / (eta * eta);
+            const auto b = sampleBsdf(m, wo, kN, mode, 7);
+            double reflections = 0.0;
+            for (size_t i = 0; i < b.samples.size(); ++i) {
+                const uint32_t flags = b.flags(i);
+                const glm::vec3 wi(b.samples[i]);
+                const glm::vec3 w = glm::vec3(b.values[i]) / b.samples[i].w;
+                ASSERT_TRUE(flags & kDelta);
+                ASSERT_EQ(b.checks[i], glm::vec4(0.0f));
+                if (flags & kReflection) {
+                    reflections += 1.0;
+                    ASSERT_NEAR(b.samples[i].w, F, 1e-5);
+                    ASSERT_NEAR(wi.x, -wo.x, 1e-6);
+                    ASSERT_NEAR(wi.y, -wo.y, 1e-6);
+                    ASSERT_NEAR(wi.z, wo.z, 1e-6);
+                    for (int k = 0; k < 3; ++k)
+                        ASSERT_NEAR(w[k], m.specularReflectance[k], 1e-5);
+                    ASSERT_EQ(b.etas[i], 1.0f);
+                } else {
+                    ASSERT_EQ(flags, kTransmission | kDelta);
+                    ASSERT_LT(sin2T, 1.0);
+                    ASSERT_NEAR(b.samples[i].w, 1.0 - F, 1e-5);
+                    ASSERT_NEAR(wi.x, -wo.x / eta, 1e-5);
+                    ASSERT_NEAR(wi.y, -wo.y / eta, 1e-5);
+                    ASSERT_NEAR(wi.z, (inside ? 1.0 : -1.0) * std::sqrt(1.0 - sin2T), 1e-5);
+                    // Radiance is scaled by 1 / eta^2 when crossing into eta (Veach 1997 5.2).
+                    const double scale = mode == kRadiance ? 1.0 / (eta * eta) : 1.0;
+                    for (int k = 0; k < 3; ++k)
+                        ASSERT_NEAR(w[k], m.specularTransmittance[k] * scale, 1e-5);
+                    ASSERT_NEAR(b.etas[i], eta, 1e-6);
+                }
+            }
+            const double p = binomialPValue(reflections, kN, F);
+            std::printf("[delta] dielectric theta=%5.1f mode=%u F=%.5f freq=%.5f p=%.4f\n", theta,
+                        mode, F, reflections / kN, p);
+            EXPECT_GE(p, alpha) << "reflection frequency " << reflections / kN << " vs F " << F;
+        }
+    }
+}
+
+TEST(BsdfDelta, PlasticSpecularChoice) {
+    Material m = makeMaterial(BsdfType::Plastic);
+    m.specularReflectance = glm::vec3(0.8f);
+    const double lum = [](glm::vec3 c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }(
+        m.reflectance);
+    const double w = 0.8 / (0.8 + lum);
+    const std::vector<double> thetas = {0, 45, 80, 89};
+    const double alpha = sidak(int(thetas.size()));
+    constexpr uint32_t kN = 1u << 18;
+    for (double theta : thetas) {
+        SCOPED_TRACE(theta);
+        const glm::vec3 wo = woAt(theta);
+        const double Fi = scene::fresnelDielectric(wo.z, m.eta);
+        const double pSpec = Fi * w / (Fi * w + (1.0 - Fi) * (1.0 - w));
+        const auto b = sampleBsdf(m, wo, kN, kRadiance, 3);
+        double specular = 0.0;
+        for (size_t i = 0; i < b.samples.size(); ++i) {
+            if (!(b.flags(i) & kDelta)) {
+                ASSERT_EQ(b.flags(i), kReflection | kDiffuse);
+                continue;
+            }
+            specular += 1.0;
+            ASSERT_EQ(b.flags(i), kReflection | kDelta);
+            ASSERT_NEAR(b.samples[i].x, -wo.x, 1e-6);
+            ASSERT_NEAR(b.samples[i].y, -wo.y, 1e-6);
+            ASSERT_NEAR(b.samples[i].z, wo.z, 1e-6);
+            ASSERT_NEAR(b.samples[i].w, pSpec, 1e-5);
+            for (int k = 0; k < 3; ++k)
+                ASSERT_NEAR(b.values[i][k] / b.samples[i].w, 0.8 * Fi / pSpec, 1e-4);
+        }
+        const double p = binomialPValue(specular, kN, pSpec);
+        std::printf("[delta] plastic theta=%4.1f P_spec=%.5f freq=%.5f p=%.4f\n", theta, pSpec,
+                    specular / kN, p);
+        EXPECT_GE(p, alpha);
+    }
+}
+
+TEST(BsdfDelta, NullPassesThrough) {
+    const Material m = makeMaterial(BsdfType::Null);
+    for (double theta : {20.0, 100.0}) {
+        const glm::vec3 wo = woAt(theta);
+        const auto b = sampleBsdf(m, wo, 64, kRadiance);
+        for (size_t i = 0; i < b.samples.size(); ++i) {
+            EXPECT_EQ(b.flags(i), kTransmission | kDelta | kNull);
+            EXPECT_EQ(glm::vec3(b.samples[i]), -wo);
+            EXPECT_EQ(b.samples[i].w, 1.0f);
+            EXPECT_EQ(glm::vec3(b.values[i]), glm::vec3(1.0f));
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fresnel and microfacet terms.
+
+TEST(Fresnel, MatchesCpuReference) {
+    std::vector<glm::vec4> params;
+    for (double eta : {1.5, 1.333, 2.4, 1.0 / 1.5})
+        for (int i = 0; i <= 400; ++i)
+            params.emplace_back(float(-1.0 + i / 200.0), float(eta), 0.2f, 3.0f);
+    Gpu& g = Gpu::get();
+    const auto& pipe = g.pipeline("fresnel_eval.comp");
+    auto in = g.upload(params, "params");
+    auto out = g.output(params.size(), "results");
+    gpu::Bindings b;
+    b.set("ParamBuffer", in).set("ResultBuffer", out);
+    gpu::PushConstants pc(pipe);
+    pc.set("count", uint32_t(params.size()));
+    g.run(pipe, b, pc, uint32_t(params.size()));
+    const auto r = g.download(*out, params.size());
+    for (size_t i = 0; i < params.size(); ++i) {
+        const double cosI = params[i].x, eta = params[i].y;
+        SCOPED_TRACE(::testing::Message() << "cos " << cosI << " eta " << eta);
+        EXPECT_NEAR(r[i].x, scene::fresnelDielectric(cosI, eta), 2e-6);
+        // Snell: sin_t = sin_i / eta (inverted from inside); cos_t opposite in sign, 0 in TIR.
+        const double e = cosI >= 0.0 ? eta : 1.0 / eta;
+        const double sin2T = (1.0 - cosI * cosI) / (e * e);
+        const double cosT = sin2T >= 1.0 ? 0.0 : (cosI >= 0.0 ? -1.0 : 1.0) * std::sqrt(1 - sin2T);
+        EXPECT_NEAR(r[i].y, cosT, 1e-5);
+        if (sin2T >= 1.0) {
+            EXPECT_EQ(r[i].x, 1.0f) << "total internal reflection";
+        }
+        EXPECT_NEAR(r[i].z, fresnelConductorReference(std::abs(cosI), 0.2, 3.0), 1e-5);
+    }
+    // Normal incidence: ((eta - 1) / (eta + 1))^2.
+    EXPECT_NEAR(scene::fresnelDielectric(1.0, 1.5), 0.04, 1e-12);
+}
+
+TEST(Fresnel, DiffuseReflectanceIdentity) {
+    // Energy balance across a smooth interface: 1 - Fdr(1/eta) = (1 - Fdr(eta)) / eta^2.
+    for (double eta : {1.1, 1.33, 1.5, 2.0}) {
+        const double ext = scene::fresnelDiffuseReflectance(eta);
+        const double in = scene::fresnelDiffuseReflectance(1.0 / eta);
+        EXPECT_NEAR(1.0 - in, (1.0 - ext) / (eta * eta), 1e-7) << eta;
+    }
+    // Known value for glass (e.g. d'Eon & Irving 2011): Fdr(1.5) ~ 0.0918.
+    EXPECT_NEAR(scene::fresnelDiffuseReflectance(1.5), 0.0918, 5e-4);
+}
+
+// Microfacet normalisation (Heitz 2014): projected area integral D(m) m.z dm = 1, and the
+// visible normal density G1(wo) <wo.m> D(m) / wo.z integrates to 1 for every wo, which holds
+// only if Lambda matches D. Quadrature in (theta, phi) with 2-point Gauss-Legendre cells.
+TEST(Microfacet, NormalisationAndVisibleNormals) {
+    const int nTheta = 1024, nPhi = 128;
+    const double gl[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
+    std::vector<glm::vec4> normals;
+    std::vector<double> weights;
+    const double dt = 0.5 * kPi / (nTheta / 2), dp = 2.0 * kPi / (nPhi / 2);
+    for (int i = 0; i < nTheta; ++i) {
+        const double theta = dt * (i / 2 + gl[i % 2]);
+        for (int j = 0; j < nPhi; ++j) {
+            const double phi = dp * (j / 2 + gl[j % 2]);
+            normals.emplace_back(sphericalDirection(std::cos(theta), phi), 0.0f);
+            weights.push_back(0.25 * dt * dp * std::sin(theta));
+        }
+    }
+    Gpu& g = Gpu::get();
+    const auto& pipe = g.pipeline("microfacet_eval.comp");
+    auto nBuf = g.upload(normals, "normals");
+    auto out = g.output(normals.size(), "results");
+    for (uint32_t dist : {0u, 1u}) {
+        for (float alpha : {0.1f, 0.5f, 1.0f}) {
+            for (double theta : {0.0, 45.0, 80.0}) {
+                SCOPED_TRACE(::testing::Message()
+                             << "dist " << dist << " alpha " << alpha << " theta " << theta);
+                const glm::vec3 wo = woAt(theta);
+                auto woBuf = g.upload(std::vector<glm::vec4>{glm::vec4(wo, 0.0f)}, "wo");
+                gpu::Bindings b;
+                b.set("WoBuffer", woBuf).set("NormalBuffer", nBuf).set("ResultBuffer", out);
+                gpu::PushConstants pc(pipe);
+                pc.set("count", uint32_t(normals.size()))
+                    .set("woCount", 1u)
+                    .set("dist", dist)
+                    .set("alpha", alpha);
+                g.run(pipe, b, pc, uint32_t(normals.size()));
+                const auto r = g.download(*out, normals.size());
+                double area = 0.0, visible = 0.0, pdf = 0.0;
+                for (size_t i = 0; i < normals.size(); ++i) {
+                    const glm::vec3 m(normals[i]);
+                    area += r[i].x * m.z * weights[i];
+                    visible += r[i].y * std::max(0.0f, glm::dot(wo, m)) * r[i].x * weights[i];
+                    pdf += r[i].z * weights[i];
+                }
+                EXPECT_NEAR(area, 1.0, 1e-3);
+                EXPECT_NEAR(visible / wo.z, 1.0, 2e-3);
+                // GGX samples visible normals (integral 1); Beckmann samples D cos (also 1).
+                EXPECT_NEAR(pdf, 1.0, 2e-3);
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Energy (white furnace: mean sample weight = directional albedo) and reciprocity.
+
+glm::dvec3 meanWeight(const SampleBatch& b, double* stdError = nullptr) {
+    glm::dvec3 sum(0.0), sum2(0.0);
+    for (size_t i = 0; i < b.samples.size(); ++i) {
+        if (!(b.samples[i].w > 0.0f)) continue;
+        const glm::dvec3 w = glm::dvec3(glm::vec3(b.values[i])) / double(b.samples[i].w);
+        sum += w;
+        sum2 += w * w;
+    }
+    const double n = double(b.samples.size());
+    const glm::dvec3 mean = sum / n;
+    if (stdError) *stdError = std::sqrt(std::max(0.0, sum2.x / n - mean.x * mean.x) / n);
+    return mean;
+}
+
+TEST(BsdfEnergy, LambertAlbedo) {
+    Material m = makeMaterial(BsdfType::Diffuse);
+    m.reflectance = glm::vec3(0.2f, 0.5f, 0.9f);
+    m.twoSided = true;
+    for (double theta : {0.0, 60.0, 150.0}) {
+        const glm::dvec3 albedo = meanWeight(sampleBsdf(m, woAt(theta), 1u << 16, kRadiance));
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(albedo[k], m.reflectance[k], 1e-4) << theta;
+    }
+}
+
+TEST(BsdfEnergy, RoughDielectricFurnace) {
+    Material m = makeMaterial(BsdfType::RoughDielectric);
+    m.specularReflectance = m.specularTransmittance = glm::vec3(1.0f);
+    for (float alpha : {0.05f, 0.3f, 0.8f}) {
+        m.alpha = alpha;
+        for (double theta : {0.0, 45.0, 80.0, 160.0, 120.0}) {
+            // Importance transport integrates the adjoint: albedo <= 1 on both sides.
+            for (uint32_t mode : {kImportance, kRadiance}) {
+                if (mode == kRadiance && theta > 90.0) continue;  // radiance gains eta^2 inside
+                double se = 0.0;
+                const double albedo =
+                    meanWeight(sampleBsdf(m, woAt(theta), 1u << 18, mode), &se).x;
+                std::printf("[furnace] roughdielectric a=%.2f theta=%5.1f mode=%u albedo=%.5f\n",
+                            alpha, theta, mode, albedo);
+                EXPECT_LE(albedo, 1.0 + 4.0 * se) << "alpha " << alpha << " theta " << theta;
+                EXPECT_GT(albedo, 0.5) << "alpha " << alpha << " theta " << theta;
+            }
+        }
+    }
+    // Smooth limit: every importance-mode weight is exactly 1.
+    Material smooth = makeMaterial(BsdfType::Dielectric);
+    smooth.specularReflectance = smooth.specularTransmittance = glm::vec3(1.0f);
+    for (double theta : {30.0, 150.0})
+        EXPECT_NEAR(meanWeight(sampleBsdf(smooth, woAt(theta), 1u << 14, kImportance)).x, 1.0,
+                    1e-5);
+}
+
+TEST(BsdfEnergy, PlasticWhiteFurnace) {
+    // A white base under a clear smooth coat reflects everything: F_i + (1 - F_i) = 1 once the
+    // internal-scattering term 1 / (1 - Fdr_int) is right.
+    Material m = makeMaterial(BsdfType::Plastic);
+    m.reflectance = glm::vec3(1.0f);
+    m.specularReflectance = glm::vec3(1.0f);
+    for (double theta : {0.0, 50.0, 85.0}) {
+        double se = 0.0;
+        const double albedo = meanWeight(sampleBsdf(m, woAt(theta), 1u << 18, kRadiance), &se).x;
+        std::printf("[furnace] plastic theta=%4.1f albedo=%.5f +- %.5f\n", theta, albedo, se);
+        EXPECT_NEAR(albedo, 1.0, 4.0 * se + 1e-4) << theta;
+    }
+}
+
+// Random unit directions in the upper (sign > 0) or lower hemisphere.
+std::vector<glm::vec4> randomDirections(size_t n, float sign, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<glm::vec4> d;
+    while (d.size() < n) {
+        const double z = 0.02 + 0.98 * u(rng);
+        d.emplace_back(sphericalDirection(z, 2.0 * kPi * u(rng)) * glm::vec3(1, 1, sign), 0.0f);
+    }
+    return d;
+}
+
+// f(wo, wi) = f(wi, wo) for reflection: eval / |cos wi| is symmetric.
+TEST(BsdfReciprocity, ReflectionLobes) {
+    using scene::Microfacet;
+    const std::vector<std::pair<std::string, Material>> materials = {
+        {"diffuse", makeMaterial(BsdfType::Diffuse)},
+        {"roughconductor ggx", makeMaterial(BsdfType::RoughConductor, 0.3f)},
+        {"roughconductor beckmann",
+         makeMaterial(BsdfType::RoughConductor, 0.3f, Microfacet::Beckmann)},
+        {"plastic", makeMaterial(BsdfType::Plastic)},
+        {"roughplastic", makeMaterial(BsdfType::RoughPlastic, 0.25f)},
+        {"roughdielectric", makeMaterial(BsdfType::RoughDielectric, 0.3f)},
+    };
+    const auto a = randomDirections(4096, 1.0f, 11), b = randomDirections(4096, 1.0f, 12);
+    for (const auto& [name, m] : materials) {
+        SCOPED_TRACE(name);
+        const auto fab = evalBsdf(m, a, b, kRadiance), fba = evalBsdf(m, b, a, kRadiance);
+        int bad = 0;
+        double maxErr = 0.0;
+        for (size_t i = 0; i < a.size(); ++i) {
+            for (int k = 0; k < 3; ++k) {
+                const double x = fab[i][k] / b[i].z, y = fba[i][k] / a[i].z;
+                const double err = std::abs(x - y) / std::max({std::abs(x), std::abs(y), 1e-6});
+                maxErr = std::max(maxErr, err);
+                if (err > 1e-4) ++bad;
+            }
+        }
+        EXPECT_EQ(bad, 0) << "max relative asymmetry " << maxErr;
+    }
+}
+
+// Refraction is not symmetric in radiance transport: f(wo, wi) eta_wi^2 = f(wi, wo) eta_wo^2
+// (Veach 1997, Eq. 5.14); the importance mode is the adjoint f*(wo, wi) = f(wi, wo).
+TEST(BsdfReciprocity, RefractionGeneralised) {
+    Material m = makeMaterial(BsdfType::RoughDielectric, 0.4f);
+    const auto above = randomDirections(4096, 1.0f, 21), below = randomDirections(4096, -1.0f, 22);
+    const auto fOut = evalBsdf(m, above, below, kRadiance);  // wo outside (eta_wo = 1)
+    const auto fIn = evalBsdf(m, below, above, kRadiance);   // wo inside (eta_wo = 1.5)
+    const auto fInAdj = evalBsdf(m, below, above, kImportance);
+    const double eta2 = double(m.eta) * m.eta;
+    int bad = 0, nonzero = 0;
+    for (size_t i = 0; i < above.size(); ++i) {
+        const double x = fOut[i].x / std::abs(below[i].z) * eta2;
+        const double y = fIn[i].x / std::abs(above[i].z);
+        const double adj = fInAdj[i].x / std::abs(above[i].z);
+        const double xr = fOut[i].x / std::abs(below[i].z);
+        if (x > 0.0) ++nonzero;
+        const double scale = std::max({std::abs(x), std::abs(y), 1e-6});
+        if (std::abs(x - y) > 1e-4 * scale) ++bad;
+        if (std::abs(xr - adj) > 1e-4 * std::max({xr, adj, 1e-6})) ++bad;
+    }
+    EXPECT_EQ(bad, 0);
+    EXPECT_GT(nonzero, 1000) << "too few refraction pairs with a non-zero BTDF";
+}
+
+// Opaque materials are black from below unless two-sided, where they mirror the front side.
+TEST(BsdfFrames, TwoSidedMirrorsTheFront) {
+    Material m = makeMaterial(BsdfType::RoughPlastic, 0.3f);
+    const auto a = randomDirections(256, 1.0f, 31), b = randomDirections(256, 1.0f, 32);
+    std::vector<glm::vec4> na = a, nb = b;
+    for (auto& v : na) v.z = -v.z;
+    for (auto& v : nb) v.z = -v.z;
+    const auto front = evalBsdf(m, a, b, kRadiance);
+    const auto backOneSided = evalBsdf(m, na, nb, kRadiance);
+    m.twoSided = true;
+    const auto backTwoSided = evalBsdf(m, na, nb, kRadiance);
+    for (size_t i = 0; i < a.size(); ++i) {
+        EXPECT_EQ(backOneSided[i], glm::vec4(0.0f));
+        EXPECT_EQ(backTwoSided[i], front[i]);
+    }
+}
+
+}  // namespace

@@ -1,0 +1,283 @@
+// Shader system: #include resolution, defines, the on-disk SPIR-V cache and its keys, hot
+// reload and error messages. Every shader is written to a temporary directory by the test.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/shader/ShaderCompiler.h"
+#include "tests/support/GpuSupport.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using loom::ShaderCompileError;
+using loom::ShaderCompiler;
+using loom::test::TempDir;
+using loom::test::writeFile;
+
+std::string canonical(const std::string& p) {
+    return fs::weakly_canonical(p).string();
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+    return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+// A kernel that writes VALUE() (from an include) to out[0]; `includeLine` is its #include.
+std::string storeKernel(const std::string& includeLine, const std::string& expr = "VALUE()") {
+    return "#version 460\n" + includeLine +
+           "\n"
+           "layout(local_size_x = 1) in;\n"
+           "layout(std430) buffer Out { float result[]; };\n"
+           "void main() { result[0] = " +
+           expr + "; }\n";
+}
+
+class ShaderTest : public ::testing::Test {
+protected:
+    TempDir dir{"loom-shader"};
+    std::string cacheDir() const { return dir / "cache"; }
+    std::string file(const std::string& rel, const std::string& text) {
+        writeFile(dir / rel, text);
+        return dir / rel;
+    }
+
+    // Runs a single-thread kernel that stores one float in "result" and returns it.
+    float run(const loom::CompiledShader& shader) {
+        auto gpu = loom::test::gpuContext();
+        auto pipeline = gpu->createPipeline(shader.spirv, shader.reflection, shader.path);
+        auto buffer = gpu->createBuffer(16, "result");
+        loom::gpu::Bindings b;
+        b.set("Out", buffer);
+        auto cmd = gpu->beginCommands();
+        cmd->fillBuffer(*buffer, 0);
+        cmd->barrier();
+        cmd->dispatch(*pipeline, b, nullptr, 1);
+        gpu->submit(*cmd);
+        float v = -1.0f;
+        gpu->downloadBuffer(*buffer, &v, sizeof(v));
+        return v;
+    }
+};
+
+TEST_F(ShaderTest, IncludeFromSearchPaths) {
+    file("first/common.glsl", "float VALUE() { return 1.5; }\n");
+    file("second/common.glsl", "float VALUE() { return 2.5; }\n");
+    file("second/only_second.glsl", "float OTHER() { return 4.0; }\n");
+    std::string main = file("src/main.comp", storeKernel("#include \"common.glsl\"\n"
+                                                         "#include <only_second.glsl>",
+                                                         "VALUE() + OTHER()"));
+    ShaderCompiler c({dir / "first", dir / "second"}, "");
+    auto s = c.compile(main);
+    EXPECT_EQ(s->path, canonical(main));
+    // The first search path that has the file wins.
+    EXPECT_TRUE(contains(s->sources, canonical(dir / "first/common.glsl")));
+    EXPECT_FALSE(contains(s->sources, canonical(dir / "second/common.glsl")));
+    EXPECT_TRUE(contains(s->sources, canonical(dir / "second/only_second.glsl")));
+    EXPECT_EQ(run(*s), 5.5f);
+    // The main file itself is found through the search paths too.
+    file("first/kernels/k.comp", storeKernel("#include \"common.glsl\""));
+    ShaderCompiler c2({dir / "first"}, "");
+    EXPECT_EQ(c2.compile("kernels/k.comp")->path, canonical(dir / "first/kernels/k.comp"));
+}
+
+TEST_F(ShaderTest, IncludeRelativeToIncludingFile) {
+    // main.comp includes sub/a.glsl, which includes "b.glsl": that must be sub/b.glsl (next to
+    // a.glsl), not the decoy next to main.comp or on the search path.
+    file("src/sub/a.glsl", "#include \"b.glsl\"\nfloat VALUE() { return B_VALUE() * 2.0; }\n");
+    file("src/sub/b.glsl", "float B_VALUE() { return 3.25; }\n");
+    file("src/b.glsl", "this is not GLSL\n");
+    file("lib/b.glsl", "this is not GLSL either\n");
+    std::string main = file("src/main.comp", storeKernel("#include \"sub/a.glsl\""));
+    ShaderCompiler c({dir / "lib"}, "");
+    auto s = c.compile(main);
+    EXPECT_EQ(s->sources,
+              (std::vector<std::string>{canonical(main), canonical(dir / "src/sub/a.glsl"),
+                                        canonical(dir / "src/sub/b.glsl")}));
+    EXPECT_EQ(run(*s), 6.5f);
+}
+
+TEST_F(ShaderTest, DefinesProduceDifferentSpirv) {
+    std::string main = file("main.comp", storeKernel("#define VALUE() (SCALE * 2.0)"));
+    ShaderCompiler c({}, "");
+    auto a = c.compile(main, {{"SCALE", "1.25"}});
+    auto b = c.compile(main, {{"SCALE", "3.0"}});
+    EXPECT_NE(a->spirv, b->spirv);
+    EXPECT_NE(a->key, b->key);
+    EXPECT_EQ(run(*a), 2.5f);
+    EXPECT_EQ(run(*b), 6.0f);
+    // The same defines again come from memory.
+    EXPECT_EQ(c.compile(main, {{"SCALE", "1.25"}}).get(), a.get());
+    EXPECT_EQ(c.stats().compiles, 2u);
+    EXPECT_EQ(c.stats().memoryHits, 1u);
+}
+
+TEST_F(ShaderTest, DiskCacheHitOnSecondCompiler) {
+    file("inc/value.glsl", "float VALUE() { return 7.0; }\n");
+    std::string main = file("main.comp", storeKernel("#include \"inc/value.glsl\""));
+    ShaderCompiler first({}, cacheDir());
+    auto a = first.compile(main, {{"MODE", "1"}});
+    EXPECT_EQ(first.stats().compiles, 1u);
+    EXPECT_EQ(first.stats().diskHits, 0u);
+    EXPECT_FALSE(a->fromDiskCache);
+    EXPECT_TRUE(fs::exists(cacheDir() + "/spirv/" + a->key + ".spv"));
+
+    ShaderCompiler second({}, cacheDir());
+    auto b = second.compile(main, {{"MODE", "1"}});
+    EXPECT_EQ(second.stats().compiles, 0u);
+    EXPECT_EQ(second.stats().diskHits, 1u);
+    EXPECT_TRUE(b->fromDiskCache);
+    EXPECT_EQ(b->spirv, a->spirv);
+    EXPECT_EQ(b->key, a->key);
+    ASSERT_EQ(b->reflection.bindings.size(), 1u);
+    EXPECT_EQ(b->reflection.bindings[0].name, "Out");
+    EXPECT_EQ(run(*b), 7.0f);
+
+    // Other defines are another cache entry.
+    second.compile(main, {{"MODE", "2"}});
+    EXPECT_EQ(second.stats().compiles, 1u);
+
+    // A corrupt entry is recompiled, not trusted.
+    writeFile(cacheDir() + "/spirv/" + a->key + ".spv", std::string(64, '\x7f'));
+    ShaderCompiler third({}, cacheDir());
+    auto c = third.compile(main, {{"MODE", "1"}});
+    EXPECT_EQ(third.stats().compiles, 1u);
+    EXPECT_EQ(third.stats().diskHits, 0u);
+    EXPECT_EQ(c->spirv, a->spirv);
+}
+
+TEST_F(ShaderTest, CacheKeyChangesWhenIncludedFileChanges) {
+    std::string inc = file("inc/value.glsl", "float VALUE() { return 1.0; }\n");
+    file("inc/deeper.glsl", "float DEEP() { return 0.5; }\n");
+    std::string main = file("main.comp", storeKernel("#include \"inc/value.glsl\""));
+    ShaderCompiler c({}, cacheDir());
+    std::string path = c.resolve(main);
+    std::string key0 = c.cacheKey(path, {});
+    EXPECT_EQ(c.cacheKey(path, {}), key0);  // stable
+    EXPECT_NE(c.cacheKey(path, {{"X", "1"}}), key0);
+    c.compile(main);
+
+    writeFile(inc, "float VALUE() { return 2.0; }\n");
+    std::string key1 = c.cacheKey(path, {});
+    EXPECT_NE(key1, key0);
+    ShaderCompiler fresh({}, cacheDir());
+    auto s = fresh.compile(main);
+    EXPECT_EQ(fresh.stats().diskHits, 0u) << "stale SPIR-V served after an include changed";
+    EXPECT_EQ(fresh.stats().compiles, 1u);
+    EXPECT_EQ(run(*s), 2.0f);
+
+    // A change two includes deep counts too.
+    writeFile(inc, "#include \"deeper.glsl\"\nfloat VALUE() { return DEEP(); }\n");
+    std::string key2 = c.cacheKey(path, {});
+    writeFile(dir / "inc/deeper.glsl", "float DEEP() { return 0.75; }\n");
+    EXPECT_NE(c.cacheKey(path, {}), key2);
+
+    // Restoring the original text finds the original entry again.
+    writeFile(inc, "float VALUE() { return 1.0; }\n");
+    EXPECT_EQ(c.cacheKey(path, {}), key0);
+    ShaderCompiler again({}, cacheDir());
+    auto t = again.compile(main);
+    EXPECT_EQ(again.stats().diskHits, 1u);
+    EXPECT_EQ(run(*t), 1.0f);
+}
+
+TEST_F(ShaderTest, ReloadChangedPicksUpEdits) {
+    std::string inc = file("inc/value.glsl", "float VALUE() { return 10.0; }\n");
+    std::string main = file("main.comp", storeKernel("#include \"inc/value.glsl\""));
+    ShaderCompiler c({}, cacheDir());
+    auto a = c.compile(main);
+    EXPECT_EQ(c.reloadChanged(), 0u);
+    EXPECT_EQ(c.generation(), 0u);
+    EXPECT_EQ(c.compile(main).get(), a.get());
+
+    writeFile(inc, "float VALUE() { return 20.0; }\n");
+    EXPECT_EQ(c.compile(main).get(), a.get()) << "memory cache is kept until reloadChanged()";
+    EXPECT_EQ(c.reloadChanged(), 1u);
+    EXPECT_EQ(c.generation(), 1u);
+    auto b = c.compile(main);
+    EXPECT_NE(b.get(), a.get());
+    EXPECT_EQ(run(*b), 20.0f);
+    EXPECT_EQ(c.stats().compiles, 2u);
+
+    // An edit of the main file is picked up as well.
+    writeFile(main, storeKernel("#include \"inc/value.glsl\"", "VALUE() + 1.0"));
+    EXPECT_EQ(c.reloadChanged(), 1u);
+    EXPECT_EQ(run(*c.compile(main)), 21.0f);
+    EXPECT_EQ(c.reloadChanged(), 0u);
+    EXPECT_EQ(c.generation(), 2u);
+}
+
+// Returns the ShaderCompileError message of compiling `path`.
+std::string compileError(ShaderCompiler& c, const std::string& path) {
+    try {
+        c.compile(path);
+    } catch (const ShaderCompileError& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << "expected ShaderCompileError, got: " << e.what();
+        return e.what();
+    }
+    ADD_FAILURE() << path << " compiled";
+    return "";
+}
+
+TEST_F(ShaderTest, CompileErrorNamesFileLineAndSourceText) {
+    std::string main = file("bad.comp",
+                            "#version 460\n"
+                            "layout(local_size_x = 1) in;\n"
+                            "layout(std430) buffer Out { float result[]; };\n"
+                            "void main() {\n"
+                            "    result[0] = undefined_thing * 2.0;\n"
+                            "}\n");
+    ShaderCompiler c({}, "");
+    std::string msg = compileError(c, main);
+    std::string where = canonical(main) + ":5: error: ";
+    EXPECT_NE(msg.find(where), std::string::npos) << msg;
+    EXPECT_NE(msg.find("undefined_thing"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("\n    " + std::string("    result[0] = undefined_thing * 2.0;")),
+              std::string::npos)
+        << msg;
+}
+
+TEST_F(ShaderTest, CompileErrorInIncludedFile) {
+    file("inc/broken.glsl",
+         "// helper\n"
+         "float VALUE() {\n"
+         "    return missing_symbol;\n"
+         "}\n");
+    std::string main = file("main.comp", storeKernel("#include \"inc/broken.glsl\""));
+    ShaderCompiler c({}, "");
+    std::string msg = compileError(c, main);
+    EXPECT_NE(msg.find(canonical(dir / "inc/broken.glsl") + ":3: error: "), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("\n        return missing_symbol;"), std::string::npos) << msg;
+}
+
+TEST_F(ShaderTest, MissingIncludeError) {
+    std::string main = file("main.comp", storeKernel("#include \"nowhere/missing.glsl\""));
+    ShaderCompiler c({dir / "lib"}, "");
+    std::string msg = compileError(c, main);
+    EXPECT_NE(msg.find(canonical(main) + ":2: error: "), std::string::npos) << msg;
+    EXPECT_NE(msg.find("nowhere/missing.glsl"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("#include \"nowhere/missing.glsl\""), std::string::npos) << msg;
+}
+
+TEST_F(ShaderTest, MissingShaderAndVersion) {
+    ShaderCompiler c({dir / "lib"}, "");
+    try {
+        c.compile("absent.comp");
+        FAIL() << "missing shader compiled";
+    } catch (const loom::UserError& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find("shader file 'absent.comp' not found"), std::string::npos) << msg;
+        EXPECT_NE(msg.find((dir / "lib") + "/absent.comp"), std::string::npos) << msg;
+    }
+    std::string noVersion = file("nov.comp", "layout(local_size_x = 1) in;\nvoid main() {}\n");
+    EXPECT_EQ(compileError(c, noVersion),
+              canonical(noVersion) + ":1: error: shader has no #version line (use #version 460)");
+}
+
+}  // namespace
