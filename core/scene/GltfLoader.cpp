@@ -8,10 +8,10 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <tiny_gltf.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
-#include <tiny_gltf.h>
 
 #include "core/scene/SceneLoader.h"
 #include "core/scene/Shapes.h"
@@ -36,7 +36,8 @@ public:
     void load() {
         tinygltf::TinyGLTF loader;
         std::string err, warn;
-        bool binary = fs::path(mPath).extension() == ".glb" || fs::path(mPath).extension() == ".GLB";
+        bool binary =
+            fs::path(mPath).extension() == ".glb" || fs::path(mPath).extension() == ".GLB";
         bool ok = binary ? loader.LoadBinaryFromFile(&mModel, &err, &warn, mPath)
                          : loader.LoadASCIIFromFile(&mModel, &err, &warn, mPath);
         auto trim = [](std::string s) {
@@ -50,7 +51,8 @@ public:
                                            "KHR_materials_ior", "KHR_materials_emissive_strength"};
             if (std::find(std::begin(kKnown), std::end(kKnown), ext) == std::end(kKnown))
                 addWarning(mScene, fmt::format("{}: required extension {} is not supported; the "
-                                               "scene may render incorrectly", mPath, ext));
+                                               "scene may render incorrectly",
+                                               mPath, ext));
         }
         if (mModel.scenes.empty()) throw UserError(mPath + ": glTF file has no scenes");
         int sceneIndex = mModel.defaultScene >= 0 ? mModel.defaultScene : 0;
@@ -65,8 +67,9 @@ public:
             Light env;
             env.type = LightType::Constant;
             mScene.lights.push_back(env);
-            addWarning(mScene, mPath + ": no lights or emissive materials; added a constant "
-                                       "environment light of radiance 1");
+            addWarning(mScene, mPath +
+                                   ": no lights or emissive materials; added a constant "
+                                   "environment light of radiance 1");
         }
     }
 
@@ -74,9 +77,9 @@ private:
     Scene& mScene;
     std::string mPath;
     tinygltf::Model mModel;
-    std::map<std::pair<int, int>, int> mMeshCache;     // (mesh, primitive) -> Scene mesh
-    std::map<int, int> mMaterialCache;                 // glTF material -> Scene material
-    std::map<int, glm::vec3> mEmission;                // glTF material -> emitted radiance
+    std::map<std::pair<int, int>, int> mMeshCache;      // (mesh, primitive) -> Scene mesh
+    std::map<int, int> mMaterialCache;                  // glTF material -> Scene material
+    std::map<int, glm::vec3> mEmission;                 // glTF material -> emitted radiance
     std::map<std::pair<int, bool>, int> mTextureCache;  // (glTF texture, raw) -> Scene texture
     int mDefaultMaterial = -1;
     bool mHaveCamera = false;
@@ -86,7 +89,8 @@ private:
     static glm::mat4 nodeMatrix(const tinygltf::Node& node) {
         if (node.matrix.size() == 16) {
             glm::mat4 m;
-            for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = float(node.matrix[size_t(i)]);  // column-major
+            for (int i = 0; i < 16; ++i)
+                glm::value_ptr(m)[i] = float(node.matrix[size_t(i)]);  // column-major
             return m;
         }
         glm::mat4 t(1.0f), r(1.0f), s(1.0f);
@@ -102,7 +106,8 @@ private:
     }
 
     void visit(int index, const glm::mat4& parent, int depth) {
-        if (index < 0 || index >= int(mModel.nodes.size())) fail(fmt::format("node {} does not exist", index));
+        if (index < 0 || index >= int(mModel.nodes.size()))
+            fail(fmt::format("node {} does not exist", index));
         if (depth > 256) fail("node hierarchy is too deep (cycle?)");
         const tinygltf::Node& node = mModel.nodes[size_t(index)];
         glm::mat4 world = parent * nodeMatrix(node);
@@ -111,23 +116,27 @@ private:
         if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end())
             if (it->second.Has("light")) addLight(it->second.Get("light").GetNumberAsInt(), world);
         if (node.skin >= 0 || !node.weights.empty())
-            addWarning(mScene, fmt::format("{}: node '{}': skinning/morph targets are not supported; "
-                                           "the bind pose is used", mPath, node.name));
+            addWarning(mScene,
+                       fmt::format("{}: node '{}': skinning/morph targets are not supported; "
+                                   "the bind pose is used",
+                                   mPath, node.name));
         for (int c : node.children) visit(c, world, depth + 1);
     }
 
     // Reads `accessor` as floats (normalised integers are mapped to [0,1] / [-1,1]).
-    std::vector<float> readFloats(int accessorIndex, int expectComponents, const std::string& what) {
+    std::vector<float> readFloats(int accessorIndex, int expectComponents,
+                                  const std::string& what) {
         if (accessorIndex < 0 || accessorIndex >= int(mModel.accessors.size()))
             fail(fmt::format("{}: accessor {} does not exist", what, accessorIndex));
         const tinygltf::Accessor& acc = mModel.accessors[size_t(accessorIndex)];
         int comps = tinygltf::GetNumComponentsInType(uint32_t(acc.type));
         if (comps != expectComponents)
-            fail(fmt::format("{}: accessor {} has {} components, expected {}", what, accessorIndex, comps,
-                             expectComponents));
+            fail(fmt::format("{}: accessor {} has {} components, expected {}", what, accessorIndex,
+                             comps, expectComponents));
         if (acc.sparse.isSparse)
             addWarning(mScene, fmt::format("{}: {}: sparse accessors are not supported; the base "
-                                           "values are used", mPath, what));
+                                           "values are used",
+                                           mPath, what));
         std::vector<float> out(acc.count * size_t(comps), 0.0f);
         if (acc.bufferView < 0) return out;  // all zeros by the spec
         const uint8_t* base = nullptr;
@@ -135,11 +144,18 @@ private:
         access(acc, comps, what, base, stride);
         for (size_t i = 0; i < acc.count; ++i)
             for (int c = 0; c < comps; ++c) {
-                const uint8_t* p = base + i * stride + size_t(c) * size_t(tinygltf::GetComponentSizeInBytes(uint32_t(acc.componentType)));
+                const uint8_t* p =
+                    base + i * stride +
+                    size_t(c) *
+                        size_t(tinygltf::GetComponentSizeInBytes(uint32_t(acc.componentType)));
                 float v = 0.0f;
                 switch (acc.componentType) {
-                    case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
-                    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = acc.normalized ? *p / 255.0f : float(*p); break;
+                    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+                        std::memcpy(&v, p, 4);
+                        break;
+                    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+                        v = acc.normalized ? *p / 255.0f : float(*p);
+                        break;
                     case TINYGLTF_COMPONENT_TYPE_BYTE: {
                         auto s = int8_t(*p);
                         v = acc.normalized ? std::max(s / 127.0f, -1.0f) : float(s);
@@ -157,7 +173,9 @@ private:
                         v = acc.normalized ? std::max(s / 32767.0f, -1.0f) : float(s);
                         break;
                     }
-                    default: fail(fmt::format("{}: unsupported component type {}", what, acc.componentType));
+                    default:
+                        fail(fmt::format("{}: unsupported component type {}", what,
+                                         acc.componentType));
                 }
                 out[i * size_t(comps) + size_t(c)] = v;
             }
@@ -176,23 +194,28 @@ private:
         for (size_t i = 0; i < acc.count; ++i) {
             const uint8_t* p = base + i * stride;
             switch (acc.componentType) {
-                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[i] = *p; break;
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+                    out[i] = *p;
+                    break;
                 case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
                     uint16_t v;
                     std::memcpy(&v, p, 2);
                     out[i] = v;
                     break;
                 }
-                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: std::memcpy(&out[i], p, 4); break;
-                default: fail(what + ": indices must be unsigned byte/short/int");
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+                    std::memcpy(&out[i], p, 4);
+                    break;
+                default:
+                    fail(what + ": indices must be unsigned byte/short/int");
             }
         }
         return out;
     }
 
     // Pointer to the first element and the element stride, with bounds checks.
-    void access(const tinygltf::Accessor& acc, int comps, const std::string& what, const uint8_t*& base,
-                size_t& stride) {
+    void access(const tinygltf::Accessor& acc, int comps, const std::string& what,
+                const uint8_t*& base, size_t& stride) {
         if (acc.bufferView < 0 || acc.bufferView >= int(mModel.bufferViews.size()))
             fail(fmt::format("{}: buffer view {} does not exist", what, acc.bufferView));
         const tinygltf::BufferView& view = mModel.bufferViews[size_t(acc.bufferView)];
@@ -200,7 +223,8 @@ private:
             fail(fmt::format("{}: buffer {} does not exist", what, view.buffer));
         const tinygltf::Buffer& buffer = mModel.buffers[size_t(view.buffer)];
         int compSize = tinygltf::GetComponentSizeInBytes(uint32_t(acc.componentType));
-        if (compSize <= 0) fail(fmt::format("{}: unknown component type {}", what, acc.componentType));
+        if (compSize <= 0)
+            fail(fmt::format("{}: unknown component type {}", what, acc.componentType));
         size_t elem = size_t(compSize) * size_t(comps);
         stride = view.byteStride ? view.byteStride : elem;
         size_t begin = view.byteOffset + acc.byteOffset;
@@ -215,18 +239,21 @@ private:
         if (auto it = mTextureCache.find(key); it != mTextureCache.end()) return it->second;
         int result = -1;
         if (textureIndex < 0 || textureIndex >= int(mModel.textures.size())) {
-            addWarning(mScene, fmt::format("{}: {}: texture {} does not exist; ignored", mPath, what, textureIndex));
+            addWarning(mScene, fmt::format("{}: {}: texture {} does not exist; ignored", mPath,
+                                           what, textureIndex));
         } else if (int source = mModel.textures[size_t(textureIndex)].source;
                    source < 0 || source >= int(mModel.images.size()) ||
                    mModel.images[size_t(source)].image.empty()) {
-            addWarning(mScene, fmt::format("{}: {}: texture {} has no decodable image; ignored", mPath,
-                                           what, textureIndex));
+            addWarning(mScene, fmt::format("{}: {}: texture {} has no decodable image; ignored",
+                                           mPath, what, textureIndex));
         } else {
             const tinygltf::Image& img = mModel.images[size_t(source)];
             Texture t;
             t.name = img.uri.empty() ? img.name : img.uri;
             t.kind = TextureKind::Bitmap;
-            t.path = img.uri.empty() ? "" : detail::resolvePath(fs::path(mPath).parent_path().string(), img.uri);
+            t.path = img.uri.empty()
+                         ? ""
+                         : detail::resolvePath(fs::path(mPath).parent_path().string(), img.uri);
             t.width = uint32_t(img.width);
             t.height = uint32_t(img.height);
             t.isNormalMap = raw;
@@ -238,8 +265,9 @@ private:
                 float c[4] = {0, 0, 0, 1};
                 for (int k = 0; k < comps && k < 4; ++k) {
                     size_t i = p * size_t(comps) + size_t(k);
-                    c[k] = sixteen ? float(img.image[i * 2] | (img.image[i * 2 + 1] << 8)) / 65535.0f
-                                   : float(img.image[i]) / 255.0f;
+                    c[k] = sixteen
+                               ? float(img.image[i * 2] | (img.image[i * 2 + 1] << 8)) / 65535.0f
+                               : float(img.image[i]) / 255.0f;
                 }
                 if (comps < 3) c[1] = c[2] = c[0];
                 // glTF colour textures are sRGB encoded; normal maps and data are linear.
@@ -282,9 +310,11 @@ private:
             return mDefaultMaterial;
         }
         if (auto it = mMaterialCache.find(index); it != mMaterialCache.end()) return it->second;
-        if (index >= int(mModel.materials.size())) fail(fmt::format("material {} does not exist", index));
+        if (index >= int(mModel.materials.size()))
+            fail(fmt::format("material {} does not exist", index));
         const tinygltf::Material& g = mModel.materials[size_t(index)];
-        std::string what = fmt::format("material '{}'", g.name.empty() ? std::to_string(index) : g.name);
+        std::string what =
+            fmt::format("material '{}'", g.name.empty() ? std::to_string(index) : g.name);
         const auto& pbr = g.pbrMetallicRoughness;
         glm::vec3 base(pbr.baseColorFactor[0], pbr.baseColorFactor[1], pbr.baseColorFactor[2]);
         float metallic = float(pbr.metallicFactor), rough = float(pbr.roughnessFactor);
@@ -301,7 +331,8 @@ private:
         m.eta = ior > 1.0f ? ior : 1.5f;
         m.twoSided = g.doubleSided;
         bool smooth = m.alpha < 1e-3f;
-        int baseTex = pbr.baseColorTexture.index >= 0 ? texture(pbr.baseColorTexture.index, false, what) : -1;
+        int baseTex =
+            pbr.baseColorTexture.index >= 0 ? texture(pbr.baseColorTexture.index, false, what) : -1;
         if (transmission >= 0.5f) {
             m.type = smooth ? BsdfType::Dielectric : BsdfType::RoughDielectric;
             m.specularTransmittance = base;
@@ -312,7 +343,8 @@ private:
             m.specularReflectance = base;
             if (baseTex >= 0) {
                 m.specularReflectanceTexture = baseTex;
-                m.specularReflectance = base * detail::textureAverage(mScene.textures[size_t(baseTex)]);
+                m.specularReflectance =
+                    base * detail::textureAverage(mScene.textures[size_t(baseTex)]);
             }
         } else {
             m.type = smooth ? BsdfType::Plastic : BsdfType::RoughPlastic;
@@ -324,27 +356,31 @@ private:
         }
         if (baseTex >= 0 && base != glm::vec3(1.0f))
             addWarning(mScene, fmt::format("{}: {}: baseColorFactor x baseColorTexture is not "
-                                           "supported; the texture is used alone", mPath, what));
+                                           "supported; the texture is used alone",
+                                           mPath, what));
         if ((metallic > 0.0f && metallic < 1.0f && transmission < 0.5f) ||
             (transmission > 0.0f && transmission < 1.0f))
             addWarning(mScene, fmt::format("{}: {}: metallic {} / transmission {} snapped to the "
-                                           "nearer of 0 and 1", mPath, what, metallic, transmission));
+                                           "nearer of 0 and 1",
+                                           mPath, what, metallic, transmission));
         if (pbr.metallicRoughnessTexture.index >= 0)
             addWarning(mScene, fmt::format("{}: {}: metallicRoughnessTexture is not supported; the "
-                                           "factors are used", mPath, what));
+                                           "factors are used",
+                                           mPath, what));
         if (g.normalTexture.index >= 0) {
             m.normalMap = texture(g.normalTexture.index, true, what + " normalTexture");
             m.normalMapUseSlopes = false;
             if (g.normalTexture.scale != 1.0)
-                addWarning(mScene, fmt::format("{}: {}: normalTexture.scale {} ignored", mPath, what,
-                                               g.normalTexture.scale));
+                addWarning(mScene, fmt::format("{}: {}: normalTexture.scale {} ignored", mPath,
+                                               what, g.normalTexture.scale));
         }
         if (g.alphaMode != "OPAQUE" && !g.alphaMode.empty())
             addWarning(mScene, fmt::format("{}: {}: alphaMode {} is not supported; rendered opaque",
                                            mPath, what, g.alphaMode));
         glm::vec3 emission(0.0f);
         if (g.emissiveFactor.size() == 3)
-            emission = glm::vec3(g.emissiveFactor[0], g.emissiveFactor[1], g.emissiveFactor[2]) * strength;
+            emission =
+                glm::vec3(g.emissiveFactor[0], g.emissiveFactor[1], g.emissiveFactor[2]) * strength;
         if (g.emissiveTexture.index >= 0 && glm::length(emission) > 0.0f) {
             int tex = texture(g.emissiveTexture.index, false, what + " emissiveTexture");
             if (tex >= 0) {
@@ -361,14 +397,16 @@ private:
     }
 
     void addMesh(const tinygltf::Node& node, const glm::mat4& world) {
-        if (node.mesh >= int(mModel.meshes.size())) fail(fmt::format("mesh {} does not exist", node.mesh));
+        if (node.mesh >= int(mModel.meshes.size()))
+            fail(fmt::format("mesh {} does not exist", node.mesh));
         const tinygltf::Mesh& gm = mModel.meshes[size_t(node.mesh)];
         for (size_t pi = 0; pi < gm.primitives.size(); ++pi) {
             const tinygltf::Primitive& prim = gm.primitives[pi];
             std::string what = fmt::format("mesh '{}' primitive {}", gm.name, pi);
             if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES) {
-                addWarning(mScene, fmt::format("{}: {}: mode {} (not triangles) is not supported; skipped",
-                                               mPath, what, prim.mode));
+                addWarning(mScene,
+                           fmt::format("{}: {}: mode {} (not triangles) is not supported; skipped",
+                                       mPath, what, prim.mode));
                 continue;
             }
             auto key = std::make_pair(node.mesh, int(pi));
@@ -379,14 +417,17 @@ private:
                 Mesh mesh;
                 mesh.name = gm.name.empty() ? fmt::format("mesh{}", node.mesh) : gm.name;
                 std::vector<float> p = readFloats(pos->second, 3, what + " POSITION");
-                for (size_t i = 0; i + 2 < p.size(); i += 3) mesh.positions.push_back({p[i], p[i + 1], p[i + 2]});
+                for (size_t i = 0; i + 2 < p.size(); i += 3)
+                    mesh.positions.push_back({p[i], p[i + 1], p[i + 2]});
                 if (auto n = prim.attributes.find("NORMAL"); n != prim.attributes.end()) {
                     std::vector<float> v = readFloats(n->second, 3, what + " NORMAL");
-                    for (size_t i = 0; i + 2 < v.size(); i += 3) mesh.normals.push_back({v[i], v[i + 1], v[i + 2]});
+                    for (size_t i = 0; i + 2 < v.size(); i += 3)
+                        mesh.normals.push_back({v[i], v[i + 1], v[i + 2]});
                 }
                 if (auto t = prim.attributes.find("TEXCOORD_0"); t != prim.attributes.end()) {
                     std::vector<float> v = readFloats(t->second, 2, what + " TEXCOORD_0");
-                    for (size_t i = 0; i + 1 < v.size(); i += 2) mesh.uvs.push_back({v[i], v[i + 1]});
+                    for (size_t i = 0; i + 1 < v.size(); i += 2)
+                        mesh.uvs.push_back({v[i], v[i + 1]});
                 }
                 std::vector<uint32_t> idx;
                 if (prim.indices >= 0) {
@@ -395,7 +436,8 @@ private:
                     idx.resize(mesh.positions.size());
                     for (size_t i = 0; i < idx.size(); ++i) idx[i] = uint32_t(i);
                 }
-                for (size_t i = 0; i + 2 < idx.size(); i += 3) mesh.indices.push_back({idx[i], idx[i + 1], idx[i + 2]});
+                for (size_t i = 0; i + 2 < idx.size(); i += 3)
+                    mesh.indices.push_back({idx[i], idx[i + 1], idx[i + 2]});
                 validateMesh(mesh, mPath + ": " + what);
                 // glTF: flat shading when normals are absent.
                 if (mesh.normals.empty()) mesh.faceNormals = true;
@@ -414,7 +456,8 @@ private:
 
     void addCamera(const tinygltf::Node& node, const glm::mat4& world) {
         if (mHaveCamera) return;  // the first camera in traversal order
-        if (node.camera >= int(mModel.cameras.size())) fail(fmt::format("camera {} does not exist", node.camera));
+        if (node.camera >= int(mModel.cameras.size()))
+            fail(fmt::format("camera {} does not exist", node.camera));
         const tinygltf::Camera& c = mModel.cameras[size_t(node.camera)];
         Camera& cam = mScene.camera;
         cam = Camera{};
@@ -434,7 +477,8 @@ private:
     }
 
     void addLight(int index, const glm::mat4& world) {
-        if (index < 0 || index >= int(mModel.lights.size())) fail(fmt::format("light {} does not exist", index));
+        if (index < 0 || index >= int(mModel.lights.size()))
+            fail(fmt::format("light {} does not exist", index));
         const tinygltf::Light& g = mModel.lights[size_t(index)];
         glm::vec3 color(1.0f);
         if (g.color.size() == 3) color = glm::vec3(g.color[0], g.color[1], g.color[2]);
@@ -443,7 +487,8 @@ private:
         // W/m^2 as they are, which keeps relative light strengths.
         l.intensity = color * float(g.intensity);
         l.position = glm::vec3(world[3]);
-        l.direction = glm::normalize(glm::vec3(world * glm::vec4(0, 0, -1, 0)));  // lights shine along -z
+        l.direction =
+            glm::normalize(glm::vec3(world * glm::vec4(0, 0, -1, 0)));  // lights shine along -z
         l.toWorld = world;
         if (g.type == "point") {
             l.type = LightType::Point;
@@ -454,13 +499,14 @@ private:
         } else if (g.type == "directional") {
             l.type = LightType::Directional;
         } else {
-            addWarning(mScene, fmt::format("{}: light '{}': type '{}' is not supported; skipped", mPath,
-                                           g.name, g.type));
+            addWarning(mScene, fmt::format("{}: light '{}': type '{}' is not supported; skipped",
+                                           mPath, g.name, g.type));
             return;
         }
         if (g.range > 0.0)
-            addWarning(mScene, fmt::format("{}: light '{}': range is ignored (inverse-square falloff)",
-                                           mPath, g.name));
+            addWarning(mScene,
+                       fmt::format("{}: light '{}': range is ignored (inverse-square falloff)",
+                                   mPath, g.name));
         mScene.lights.push_back(l);
     }
 };

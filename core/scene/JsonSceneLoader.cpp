@@ -27,9 +27,12 @@ namespace fs = std::filesystem;
 std::string escapeKey(const std::string& key) {
     std::string r;
     for (char c : key) {
-        if (c == '~') r += "~0";
-        else if (c == '/') r += "~1";
-        else r += c;
+        if (c == '~')
+            r += "~0";
+        else if (c == '/')
+            r += "~1";
+        else
+            r += c;
     }
     return r;
 }
@@ -43,23 +46,28 @@ std::string join(const std::vector<std::string>& v) {
 class JsonSceneLoader {
 public:
     JsonSceneLoader(Scene& scene, const std::string& path)
-        : mScene(scene), mSrc(JsonSource::load(path)), mDir(fs::path(path).parent_path().string()) {}
+        : mScene(scene),
+          mSrc(JsonSource::load(path)),
+          mDir(fs::path(path).parent_path().string()) {}
 
     void load() {
         const json& root = mSrc.root();
         if (!root.is_object()) fail("", "expected a JSON object at the top level");
         checkKeys(root, "", "scene",
-                  {"loom_scene", "description", "camera", "textures", "materials", "shapes", "lights",
-                   "environment"});
+                  {"loom_scene", "description", "camera", "textures", "materials", "shapes",
+                   "lights", "environment"});
         if (root.contains("loom_scene")) {
             int version = integer(root, "", "loom_scene", 1);
-            if (version != 1) fail("/loom_scene", fmt::format("unsupported format version {} (expected 1)", version));
+            if (version != 1)
+                fail("/loom_scene",
+                     fmt::format("unsupported format version {} (expected 1)", version));
         }
         if (root.contains("description")) string(root, "", "description", "");
         if (root.contains("textures")) {
             const json& t = root["textures"];
             if (!t.is_object()) fail("/textures", "expected an object mapping names to textures");
-            for (auto it = t.begin(); it != t.end(); ++it) mTextureNodes[it.key()] = "/textures/" + escapeKey(it.key());
+            for (auto it = t.begin(); it != t.end(); ++it)
+                mTextureNodes[it.key()] = "/textures/" + escapeKey(it.key());
         }
         if (root.contains("materials")) {
             const json& m = root["materials"];
@@ -71,31 +79,38 @@ public:
         }
         if (!root.contains("shapes")) fail("", "missing key 'shapes'");
         const json& shapes = root["shapes"];
-        if (!shapes.is_array() || shapes.empty()) fail("/shapes", "expected a non-empty array of shapes");
-        for (size_t i = 0; i < shapes.size(); ++i) addShape(shapes[i], fmt::format("/shapes/{}", i));
+        if (!shapes.is_array() || shapes.empty())
+            fail("/shapes", "expected a non-empty array of shapes");
+        for (size_t i = 0; i < shapes.size(); ++i)
+            addShape(shapes[i], fmt::format("/shapes/{}", i));
         if (root.contains("lights")) {
             const json& lights = root["lights"];
             if (!lights.is_array()) fail("/lights", "expected an array of lights");
-            for (size_t i = 0; i < lights.size(); ++i) addLight(lights[i], fmt::format("/lights/{}", i));
+            for (size_t i = 0; i < lights.size(); ++i)
+                addLight(lights[i], fmt::format("/lights/{}", i));
         }
         if (root.contains("environment")) addEnvironment(root["environment"], "/environment");
         if (root.contains("camera")) {
             addCamera(root["camera"], "/camera");
         } else {
-            detail::addWarning(mScene, mSrc.filename() + ": no camera; using a default camera in front of the scene");
+            detail::addWarning(
+                mScene,
+                mSrc.filename() + ": no camera; using a default camera in front of the scene");
             detail::setDefaultCamera(mScene);
         }
         bool lit = !mScene.lights.empty() ||
                    std::any_of(mScene.shapes.begin(), mScene.shapes.end(),
                                [](const Shape& s) { return glm::length(s.emission) > 0.0f; });
-        if (!lit) detail::addWarning(mScene, mSrc.filename() + ": the scene has no lights or emissive shapes");
+        if (!lit)
+            detail::addWarning(mScene,
+                               mSrc.filename() + ": the scene has no lights or emissive shapes");
     }
 
 private:
     Scene& mScene;
     JsonSource mSrc;
     std::string mDir;
-    std::map<std::string, std::string> mTextureNodes;  // texture name -> JSON pointer
+    std::map<std::string, std::string> mTextureNodes;       // texture name -> JSON pointer
     std::map<std::pair<std::string, bool>, int> mTextures;  // (name, raw) -> Scene texture
     std::map<std::string, int> mMaterials;
     std::map<std::string, int> mMeshCache;
@@ -105,14 +120,16 @@ private:
     [[noreturn]] void fail(const std::string& ptr, const std::string& what) const {
         throw UserError(mSrc.where(ptr) + ": " + what);
     }
-    static std::string child(const std::string& ptr, const std::string& key) { return ptr + "/" + escapeKey(key); }
+    static std::string child(const std::string& ptr, const std::string& key) {
+        return ptr + "/" + escapeKey(key);
+    }
 
     void checkKeys(const json& j, const std::string& ptr, const std::string& what,
                    const std::vector<std::string>& valid) const {
         for (auto it = j.begin(); it != j.end(); ++it)
             if (std::find(valid.begin(), valid.end(), it.key()) == valid.end())
-                fail(child(ptr, it.key()),
-                     fmt::format("unknown key '{}' in {}; valid keys: {}", it.key(), what, join(valid)));
+                fail(child(ptr, it.key()), fmt::format("unknown key '{}' in {}; valid keys: {}",
+                                                       it.key(), what, join(valid)));
     }
     const json* find(const json& j, const std::string& key) const {
         auto it = j.find(key);
@@ -143,17 +160,21 @@ private:
         if (!v->is_string()) fail(child(ptr, key), "'" + key + "' must be a string");
         return v->get<std::string>();
     }
-    std::vector<float> numbers(const json& v, const std::string& ptr, size_t n, const std::string& key) const {
+    std::vector<float> numbers(const json& v, const std::string& ptr, size_t n,
+                               const std::string& key) const {
         if (!v.is_array() || v.size() != n)
             fail(ptr, fmt::format("'{}' must be an array of {} numbers", key, n));
         std::vector<float> r;
         for (size_t i = 0; i < n; ++i) {
-            if (!v[i].is_number()) fail(fmt::format("{}/{}", ptr, i), fmt::format("'{}' must be an array of {} numbers", key, n));
+            if (!v[i].is_number())
+                fail(fmt::format("{}/{}", ptr, i),
+                     fmt::format("'{}' must be an array of {} numbers", key, n));
             r.push_back(v[i].get<float>());
         }
         return r;
     }
-    glm::vec3 vec3(const json& j, const std::string& ptr, const std::string& key, const glm::vec3& def) const {
+    glm::vec3 vec3(const json& j, const std::string& ptr, const std::string& key,
+                   const glm::vec3& def) const {
         const json* v = find(j, key);
         if (!v) return def;
         std::vector<float> r = numbers(*v, child(ptr, key), 3, key);
@@ -164,14 +185,16 @@ private:
         return vec3(j, ptr, key, glm::vec3(0.0f));
     }
     // A colour: a number (grey) or [r, g, b].
-    glm::vec3 color(const json& j, const std::string& ptr, const std::string& key, const glm::vec3& def) const {
+    glm::vec3 color(const json& j, const std::string& ptr, const std::string& key,
+                    const glm::vec3& def) const {
         const json* v = find(j, key);
         if (!v) return def;
         if (v->is_number()) return glm::vec3(v->get<float>());
         if (v->is_array() && v->size() == 3) return vec3(j, ptr, key, def);
         fail(child(ptr, key), "'" + key + "' must be a number or [r, g, b]");
     }
-    glm::vec2 vec2OrScalar(const json& j, const std::string& ptr, const std::string& key, glm::vec2 def) const {
+    glm::vec2 vec2OrScalar(const json& j, const std::string& ptr, const std::string& key,
+                           glm::vec2 def) const {
         const json* v = find(j, key);
         if (!v) return def;
         if (v->is_number()) return glm::vec2(v->get<float>());
@@ -190,11 +213,13 @@ private:
         if (v.is_object()) return transformOp(v, ptr);
         if (!v.is_array()) fail(ptr, "a transform must be an operation object or an array of them");
         glm::mat4 m(1.0f);
-        for (size_t i = 0; i < v.size(); ++i) m = transformOp(v[i], fmt::format("{}/{}", ptr, i)) * m;
+        for (size_t i = 0; i < v.size(); ++i)
+            m = transformOp(v[i], fmt::format("{}/{}", ptr, i)) * m;
         return m;
     }
     glm::mat4 transformOp(const json& op, const std::string& ptr) const {
-        static const std::vector<std::string> kOps = {"translate", "scale", "rotate", "matrix", "lookat"};
+        static const std::vector<std::string> kOps = {"translate", "scale", "rotate", "matrix",
+                                                      "lookat"};
         if (!op.is_object() || op.size() != 1)
             fail(ptr, "a transform operation is an object with exactly one key: " + join(kOps));
         const std::string key = op.begin().key();
@@ -210,12 +235,14 @@ private:
             return glm::scale(glm::mat4(1.0f), glm::vec3(s[0], s[1], s[2]));
         }
         if (key == "rotate") {
-            if (!v.is_object()) fail(p, "'rotate' must be {\"axis\": [x, y, z], \"angle\": degrees}");
+            if (!v.is_object())
+                fail(p, "'rotate' must be {\"axis\": [x, y, z], \"angle\": degrees}");
             checkKeys(v, p, "rotate", {"axis", "angle"});
             glm::vec3 axis = requiredVec3(v, p, "axis");
             if (glm::length(axis) == 0.0f) fail(child(p, "axis"), "rotation axis is zero");
             if (!find(v, "angle")) fail(p, "missing key 'angle'");
-            return glm::rotate(glm::mat4(1.0f), glm::radians(number(v, p, "angle", 0.0f)), glm::normalize(axis));
+            return glm::rotate(glm::mat4(1.0f), glm::radians(number(v, p, "angle", 0.0f)),
+                               glm::normalize(axis));
         }
         if (key == "matrix") {
             glm::mat4 m(1.0f);
@@ -234,7 +261,8 @@ private:
             if (o == t) fail(p, "origin and target coincide");
             return lookAtMatrix(o, t, vec3(v, p, "up", glm::vec3(0, 1, 0)));
         }
-        fail(child(ptr, key), fmt::format("unknown transform operation '{}'; valid: {}", key, join(kOps)));
+        fail(child(ptr, key),
+             fmt::format("unknown transform operation '{}'; valid: {}", key, join(kOps)));
     }
 
     // ---- textures and materials -------------------------------------------------------------
@@ -255,9 +283,11 @@ private:
         if (type == "bitmap") {
             checkKeys(t, ptr, "bitmap texture", {"type", "file", "raw", "uv_scale"});
             std::string path = file(t, ptr, "file");
-            if (!fs::exists(path)) fail(child(ptr, "file"), fmt::format("texture file not found: '{}'", path));
+            if (!fs::exists(path))
+                fail(child(ptr, "file"), fmt::format("texture file not found: '{}'", path));
             index = detail::addBitmapTexture(mScene, path, boolean(t, ptr, "raw", raw),
-                                             vec2OrScalar(t, ptr, "uv_scale", glm::vec2(1.0f)), mSrc.where(ptr));
+                                             vec2OrScalar(t, ptr, "uv_scale", glm::vec2(1.0f)),
+                                             mSrc.where(ptr));
             if (index < 0) fail(ptr, "cannot read texture '" + path + "'");
         } else if (type == "checkerboard") {
             checkKeys(t, ptr, "checkerboard texture", {"type", "color0", "color1", "uv_scale"});
@@ -270,13 +300,15 @@ private:
             mScene.textures.push_back(tex);
             index = int(mScene.textures.size() - 1);
         } else {
-            fail(child(ptr, "type"), "texture type must be 'bitmap' or 'checkerboard', got '" + type + "'");
+            fail(child(ptr, "type"),
+                 "texture type must be 'bitmap' or 'checkerboard', got '" + type + "'");
         }
         mTextures[{name, raw}] = index;
         return index;
     }
     // A colour, or a string naming a texture: returns the texture index (-1 for a colour).
-    int colorOrTexture(const json& j, const std::string& ptr, const std::string& key, glm::vec3& value) {
+    int colorOrTexture(const json& j, const std::string& ptr, const std::string& key,
+                       glm::vec3& value) {
         const json* v = find(j, key);
         if (v && v->is_string()) {
             int tex = texture(v->get<std::string>(), false, child(ptr, key));
@@ -292,7 +324,8 @@ private:
         if (v->is_string()) {
             float r = 1.0f;
             if (!detail::namedIor(v->get<std::string>(), r))
-                fail(child(ptr, key), "unknown IOR name '" + v->get<std::string>() + "' (e.g. water, bk7, diamond)");
+                fail(child(ptr, key),
+                     "unknown IOR name '" + v->get<std::string>() + "' (e.g. water, bk7, diamond)");
             return r;
         }
         float r = number(j, ptr, key, def);
@@ -304,20 +337,26 @@ private:
         if (!j.is_object()) fail(ptr, "a material must be an object");
         std::string type = string(j, ptr, "type", "");
         static const std::map<std::string, BsdfType> kTypes = {
-            {"diffuse", BsdfType::Diffuse},           {"dielectric", BsdfType::Dielectric},
-            {"roughdielectric", BsdfType::RoughDielectric}, {"conductor", BsdfType::Conductor},
-            {"roughconductor", BsdfType::RoughConductor}, {"plastic", BsdfType::Plastic},
-            {"roughplastic", BsdfType::RoughPlastic},   {"null", BsdfType::Null}};
+            {"diffuse", BsdfType::Diffuse},
+            {"dielectric", BsdfType::Dielectric},
+            {"roughdielectric", BsdfType::RoughDielectric},
+            {"conductor", BsdfType::Conductor},
+            {"roughconductor", BsdfType::RoughConductor},
+            {"plastic", BsdfType::Plastic},
+            {"roughplastic", BsdfType::RoughPlastic},
+            {"null", BsdfType::Null}};
         auto it = kTypes.find(type);
         if (it == kTypes.end())
             fail(find(j, "type") ? child(ptr, "type") : ptr,
                  "material 'type' must be one of diffuse, dielectric, roughdielectric, conductor, "
-                 "roughconductor, plastic, roughplastic, null; got '" + type + "'");
+                 "roughconductor, plastic, roughplastic, null; got '" +
+                     type + "'");
         Material m;
         m.name = name;
         m.type = it->second;
         std::vector<std::string> keys = {"type", "two_sided", "normal_map"};
-        bool rough = type == "roughdielectric" || type == "roughconductor" || type == "roughplastic";
+        bool rough =
+            type == "roughdielectric" || type == "roughconductor" || type == "roughplastic";
         if (rough) keys.insert(keys.end(), {"alpha", "distribution"});
         if (type == "diffuse") keys.push_back("reflectance");
         if (type == "dielectric" || type == "roughdielectric")
@@ -333,9 +372,12 @@ private:
             m.alpha = number(j, ptr, "alpha", 0.1f);
             if (!(m.alpha > 0.0f)) fail(child(ptr, "alpha"), "'alpha' must be positive");
             std::string d = string(j, ptr, "distribution", "ggx");
-            if (d == "ggx") m.distribution = Microfacet::GGX;
-            else if (d == "beckmann") m.distribution = Microfacet::Beckmann;
-            else fail(child(ptr, "distribution"), "'distribution' must be ggx or beckmann");
+            if (d == "ggx")
+                m.distribution = Microfacet::GGX;
+            else if (d == "beckmann")
+                m.distribution = Microfacet::Beckmann;
+            else
+                fail(child(ptr, "distribution"), "'distribution' must be ggx or beckmann");
         }
         if (type == "diffuse" || type == "plastic" || type == "roughplastic")
             m.reflectanceTexture = colorOrTexture(j, ptr, "reflectance", m.reflectance);
@@ -343,11 +385,13 @@ private:
             m.specularReflectance = glm::vec3(1.0f);
             int tex = colorOrTexture(j, ptr, "specular_reflectance", m.specularReflectance);
             if (tex >= 0 && type != "conductor" && type != "roughconductor")
-                fail(child(ptr, "specular_reflectance"), "only conductors take a textured specular_reflectance");
+                fail(child(ptr, "specular_reflectance"),
+                     "only conductors take a textured specular_reflectance");
             m.specularReflectanceTexture = tex;
         }
         m.specularTransmittance = color(j, ptr, "specular_transmittance", glm::vec3(1.0f));
-        if (m.type == BsdfType::Dielectric || m.type == BsdfType::RoughDielectric) m.eta = ior(j, ptr, "ior", 1.5f);
+        if (m.type == BsdfType::Dielectric || m.type == BsdfType::RoughDielectric)
+            m.eta = ior(j, ptr, "ior", 1.5f);
         if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
             m.eta = ior(j, ptr, "ior", 1.5f);
             m.nonlinear = boolean(j, ptr, "nonlinear", false);
@@ -361,8 +405,8 @@ private:
             } else {
                 std::string metal = string(j, ptr, "metal", "none");
                 if (!detail::conductorIor(metal, m.conductorEta, m.conductorK))
-                    fail(child(ptr, "metal"),
-                         fmt::format("unknown metal '{}' (known: {})", metal, detail::conductorNames()));
+                    fail(child(ptr, "metal"), fmt::format("unknown metal '{}' (known: {})", metal,
+                                                          detail::conductorNames()));
             }
         }
         if (const json* nm = find(j, "normal_map")) {
@@ -373,13 +417,16 @@ private:
             } else if (nm->is_object()) {
                 checkKeys(*nm, p, "normal_map", {"file", "tiles", "use_slopes"});
                 std::string path = file(*nm, p, "file");
-                if (!fs::exists(path)) fail(child(p, "file"), fmt::format("normal map file not found: '{}'", path));
-                m.normalMap = detail::addBitmapTexture(mScene, path, true,
-                                                       glm::vec2(number(*nm, p, "tiles", 1.0f)), mSrc.where(p));
+                if (!fs::exists(path))
+                    fail(child(p, "file"), fmt::format("normal map file not found: '{}'", path));
+                m.normalMap = detail::addBitmapTexture(
+                    mScene, path, true, glm::vec2(number(*nm, p, "tiles", 1.0f)), mSrc.where(p));
                 if (m.normalMap < 0) fail(p, "cannot read normal map '" + path + "'");
                 m.normalMapUseSlopes = boolean(*nm, p, "use_slopes", true);
             } else {
-                fail(p, "'normal_map' must be a texture name or {\"file\", \"tiles\", \"use_slopes\"}");
+                fail(
+                    p,
+                    "'normal_map' must be a texture name or {\"file\", \"tiles\", \"use_slopes\"}");
             }
         }
         mScene.materials.push_back(m);
@@ -397,10 +444,21 @@ private:
     void addShape(const json& j, const std::string& ptr) {
         if (!j.is_object()) fail(ptr, "a shape must be an object");
         std::string type = string(j, ptr, "type", "");
-        std::vector<std::string> keys = {"name", "type", "material", "transform", "transform_end",
-                                         "emission", "caustic_caster", "caustic_receiver",
-                                         "caustic_bouncer", "caustic_emitter", "caustic_multi",
-                                         "visible_camera", "visible_shadow", "ray_mask", "flip_normals",
+        std::vector<std::string> keys = {"name",
+                                         "type",
+                                         "material",
+                                         "transform",
+                                         "transform_end",
+                                         "emission",
+                                         "caustic_caster",
+                                         "caustic_receiver",
+                                         "caustic_bouncer",
+                                         "caustic_emitter",
+                                         "caustic_multi",
+                                         "visible_camera",
+                                         "visible_shadow",
+                                         "ray_mask",
+                                         "flip_normals",
                                          "face_normals"};
         static const std::map<std::string, std::vector<std::string>> kTypeKeys = {
             {"mesh", {"file"}},
@@ -415,13 +473,15 @@ private:
         if (tk == kTypeKeys.end())
             fail(find(j, "type") ? child(ptr, "type") : ptr,
                  "shape 'type' must be one of mesh, rectangle, cube, sphere, disk, cylinder, "
-                 "heightfield, grass; got '" + type + "'");
+                 "heightfield, grass; got '" +
+                     type + "'");
         keys.insert(keys.end(), tk->second.begin(), tk->second.end());
         checkKeys(j, ptr, type + " shape", keys);
 
         Shape s;
         s.name = string(j, ptr, "name", fmt::format("{}{}", type, mScene.shapes.size()));
-        if (const json* t = find(j, "transform")) s.toWorld = transform(*t, child(ptr, "transform"));
+        if (const json* t = find(j, "transform"))
+            s.toWorld = transform(*t, child(ptr, "transform"));
         if (const json* t = find(j, "transform_end")) {
             s.toWorldEnd = transform(*t, child(ptr, "transform_end"));
             s.moving = true;
@@ -441,37 +501,49 @@ private:
         std::string variant = fmt::format("|{}|{}", faceNormals, flip);
         auto segments = [&](const char* key, int def) {
             int n = integer(j, ptr, key, def);
-            if (n < 3 || n > 4096) fail(child(ptr, key), fmt::format("'{}' must be in [3, 4096]", key));
+            if (n < 3 || n > 4096)
+                fail(child(ptr, key), fmt::format("'{}' must be in [3, 4096]", key));
             return uint32_t(n);
         };
         if (type == "mesh") {
             std::string path = file(j, ptr, "file");
-            if (!fs::exists(path)) fail(child(ptr, "file"), fmt::format("mesh file not found: '{}'", path));
+            if (!fs::exists(path))
+                fail(child(ptr, "file"), fmt::format("mesh file not found: '{}'", path));
             std::string ext = fs::path(path).extension().string();
-            if (ext != ".obj" && ext != ".ply") fail(child(ptr, "file"), "mesh files must be .obj or .ply");
-            s.mesh = mesh(path + variant, [&] { return finish(ext == ".obj" ? readObjMesh(path) : readPly(path)); });
+            if (ext != ".obj" && ext != ".ply")
+                fail(child(ptr, "file"), "mesh files must be .obj or .ply");
+            s.mesh = mesh(path + variant, [&] {
+                return finish(ext == ".obj" ? readObjMesh(path) : readPly(path));
+            });
         } else if (type == "rectangle" || type == "cube") {
-            s.mesh = mesh(type + variant, [&] { return finish(type == "rectangle" ? makeRectangle() : makeCube()); });
+            s.mesh = mesh(type + variant, [&] {
+                return finish(type == "rectangle" ? makeRectangle() : makeCube());
+            });
         } else if (type == "sphere") {
             glm::vec3 center = vec3(j, ptr, "center", glm::vec3(0.0f));
             float radius = number(j, ptr, "radius", 1.0f);
-            s.toWorld = s.toWorld * glm::translate(glm::mat4(1.0f), center) * glm::scale(glm::mat4(1.0f), glm::vec3(radius));
+            s.toWorld = s.toWorld * glm::translate(glm::mat4(1.0f), center) *
+                        glm::scale(glm::mat4(1.0f), glm::vec3(radius));
             if (s.moving)
                 s.toWorldEnd = s.toWorldEnd * glm::translate(glm::mat4(1.0f), center) *
                                glm::scale(glm::mat4(1.0f), glm::vec3(radius));
             uint32_t rings = segments("rings", 32), segs = segments("segments", 64);
-            s.mesh = mesh(fmt::format("sphere{}x{}{}", rings, segs, variant), [&] { return finish(makeSphere(rings, segs)); });
+            s.mesh = mesh(fmt::format("sphere{}x{}{}", rings, segs, variant),
+                          [&] { return finish(makeSphere(rings, segs)); });
         } else if (type == "disk") {
             uint32_t segs = segments("segments", 64);
-            s.mesh = mesh(fmt::format("disk{}{}", segs, variant), [&] { return finish(makeDisk(segs)); });
+            s.mesh = mesh(fmt::format("disk{}{}", segs, variant),
+                          [&] { return finish(makeDisk(segs)); });
         } else if (type == "cylinder") {
-            glm::vec3 p0 = vec3(j, ptr, "p0", glm::vec3(0.0f)), p1 = vec3(j, ptr, "p1", glm::vec3(0, 0, 1));
+            glm::vec3 p0 = vec3(j, ptr, "p0", glm::vec3(0.0f)),
+                      p1 = vec3(j, ptr, "p1", glm::vec3(0, 0, 1));
             if (p0 == p1) fail(ptr, "p0 and p1 coincide");
             glm::mat4 c = cylinderTransform(p0, p1, number(j, ptr, "radius", 1.0f));
             s.toWorld = s.toWorld * c;
             if (s.moving) s.toWorldEnd = s.toWorldEnd * c;
             uint32_t segs = segments("segments", 64);
-            s.mesh = mesh(fmt::format("cylinder{}{}", segs, variant), [&] { return finish(makeCylinder(segs)); });
+            s.mesh = mesh(fmt::format("cylinder{}{}", segs, variant),
+                          [&] { return finish(makeCylinder(segs)); });
         } else if (type == "heightfield") {
             s.mesh = int(mScene.meshes.size());
             mScene.meshes.push_back(finish(heightfield(j, ptr)));
@@ -502,7 +574,8 @@ private:
                 if (it == mMaterials.end()) {
                     std::vector<std::string> names;
                     for (auto& [k, v] : mMaterials) names.push_back(k);
-                    fail(p, fmt::format("unknown material '{}' (defined materials: {})", mat->get<std::string>(),
+                    fail(p, fmt::format("unknown material '{}' (defined materials: {})",
+                                        mat->get<std::string>(),
                                         names.empty() ? "none" : join(names)));
                 }
                 s.material = it->second;
@@ -518,7 +591,8 @@ private:
             s.material = mDefaultMaterial;
         }
         s.emission = color(j, ptr, "emission", glm::vec3(0.0f));
-        if (s.emission.x < 0 || s.emission.y < 0 || s.emission.z < 0) fail(child(ptr, "emission"), "emission must be >= 0");
+        if (s.emission.x < 0 || s.emission.y < 0 || s.emission.z < 0)
+            fail(child(ptr, "emission"), "emission must be >= 0");
 
         // Flags.
         s.flags = 0;
@@ -526,14 +600,19 @@ private:
         if (boolean(j, ptr, "visible_shadow", true)) s.flags |= kVisibleShadow;
         if (boolean(j, ptr, "caustic_caster", false)) {
             BsdfType t = mScene.materials[size_t(s.material)].type;
-            if (t == BsdfType::Dielectric || t == BsdfType::RoughDielectric) s.flags |= kCausticCasterRefract;
-            else if (t == BsdfType::Conductor || t == BsdfType::RoughConductor) s.flags |= kCausticCasterReflect;
-            else fail(child(ptr, "caustic_caster"), "caustic casters need a dielectric or conductor material");
+            if (t == BsdfType::Dielectric || t == BsdfType::RoughDielectric)
+                s.flags |= kCausticCasterRefract;
+            else if (t == BsdfType::Conductor || t == BsdfType::RoughConductor)
+                s.flags |= kCausticCasterReflect;
+            else
+                fail(child(ptr, "caustic_caster"),
+                     "caustic casters need a dielectric or conductor material");
         }
         if (boolean(j, ptr, "caustic_receiver", false)) s.flags |= kCausticReceiver;
         if (boolean(j, ptr, "caustic_bouncer", false)) s.flags |= kCausticBouncer;
         if (boolean(j, ptr, "caustic_emitter", false)) {
-            if (glm::length(s.emission) == 0.0f) fail(child(ptr, "caustic_emitter"), "caustic_emitter needs an emission");
+            if (glm::length(s.emission) == 0.0f)
+                fail(child(ptr, "caustic_emitter"), "caustic_emitter needs an emission");
             s.flags |= kCausticEmitter;
         }
         if (boolean(j, ptr, "caustic_multi", false)) s.flags |= kCausticMulti;
@@ -546,7 +625,8 @@ private:
     Mesh heightfield(const json& j, const std::string& ptr) {
         glm::uvec2 res(64);
         if (const json* r = find(j, "resolution")) {
-            if (r->is_number_integer()) res = glm::uvec2(uint32_t(std::max(r->get<int>(), 0)));
+            if (r->is_number_integer())
+                res = glm::uvec2(uint32_t(std::max(r->get<int>(), 0)));
             else {
                 std::vector<float> v = numbers(*r, child(ptr, "resolution"), 2, "resolution");
                 res = {uint32_t(std::max(v[0], 0.0f)), uint32_t(std::max(v[1], 0.0f))};
@@ -556,26 +636,32 @@ private:
         }
         float scale = number(j, ptr, "height_scale", 1.0f);
         bool hasFormula = find(j, "height"), hasImage = find(j, "image");
-        if (hasFormula == hasImage) fail(ptr, "a heightfield needs exactly one of 'height' (formula) or 'image'");
+        if (hasFormula == hasImage)
+            fail(ptr, "a heightfield needs exactly one of 'height' (formula) or 'image'");
         if (hasFormula) {
             std::string text = string(j, ptr, "height", "");
             HeightFormula f = HeightFormula::parse(text, mSrc.where(child(ptr, "height")));
-            Mesh m = makeHeightfield(res.x, res.y, [&](float x, float y) { return scale * f(x, y); });
+            Mesh m =
+                makeHeightfield(res.x, res.y, [&](float x, float y) { return scale * f(x, y); });
             for (const glm::vec3& p : m.positions)
                 if (!std::isfinite(p.z))
-                    fail(child(ptr, "height"), fmt::format("formula is not finite at x = {}, y = {}", p.x, p.y));
+                    fail(child(ptr, "height"),
+                         fmt::format("formula is not finite at x = {}, y = {}", p.x, p.y));
             return m;
         }
         std::string path = file(j, ptr, "image");
-        if (!fs::exists(path)) fail(child(ptr, "image"), fmt::format("height image not found: '{}'", path));
+        if (!fs::exists(path))
+            fail(child(ptr, "image"), fmt::format("height image not found: '{}'", path));
         ImageData img = readImage(path, false);
         // Bilinear lookup of the luminance (first channel for grey images), uv as the mesh's.
         auto lum = [&](uint32_t x, uint32_t y) {
             if (img.channels < 3) return img.at(x, y, 0);
-            return 0.2126f * img.at(x, y, 0) + 0.7152f * img.at(x, y, 1) + 0.0722f * img.at(x, y, 2);
+            return 0.2126f * img.at(x, y, 0) + 0.7152f * img.at(x, y, 1) +
+                   0.0722f * img.at(x, y, 2);
         };
         return makeHeightfield(res.x, res.y, [&](float x, float y) {
-            float u = (x + 1.0f) * 0.5f * float(img.width - 1), v = (y + 1.0f) * 0.5f * float(img.height - 1);
+            float u = (x + 1.0f) * 0.5f * float(img.width - 1),
+                  v = (y + 1.0f) * 0.5f * float(img.height - 1);
             auto x0 = uint32_t(std::floor(u)), y0 = uint32_t(std::floor(v));
             uint32_t x1 = std::min(x0 + 1, img.width - 1), y1 = std::min(y0 + 1, img.height - 1);
             float fx = u - float(x0), fy = v - float(y0);
@@ -598,30 +684,36 @@ private:
             l.toWorld = glm::translate(glm::mat4(1.0f), l.position);
         } else if (type == "spot") {
             checkKeys(j, ptr, "spot light",
-                      {"type", "position", "target", "direction", "intensity", "cutoff_angle", "beam_width",
-                       "caustic_emitter"});
+                      {"type", "position", "target", "direction", "intensity", "cutoff_angle",
+                       "beam_width", "caustic_emitter"});
             l.type = LightType::Spot;
             l.position = requiredVec3(j, ptr, "position");
-            if (find(j, "target") == find(j, "direction") || (find(j, "target") && find(j, "direction")))
+            if (find(j, "target") == find(j, "direction") ||
+                (find(j, "target") && find(j, "direction")))
                 fail(ptr, "a spot light needs exactly one of 'target' or 'direction'");
-            glm::vec3 dir = find(j, "target") ? vec3(j, ptr, "target", {}) - l.position : vec3(j, ptr, "direction", {});
+            glm::vec3 dir = find(j, "target") ? vec3(j, ptr, "target", {}) - l.position
+                                              : vec3(j, ptr, "direction", {});
             if (glm::length(dir) == 0.0f) fail(ptr, "spot direction is zero");
             l.direction = glm::normalize(dir);
             l.intensity = color(j, ptr, "intensity", glm::vec3(1.0f));
             l.cutoffAngle = number(j, ptr, "cutoff_angle", 20.0f);
             l.beamWidth = number(j, ptr, "beam_width", 0.75f * l.cutoffAngle);
-            if (!(l.cutoffAngle > 0.0f && l.cutoffAngle <= 90.0f)) fail(child(ptr, "cutoff_angle"), "must be in (0, 90]");
-            l.toWorld = lookAtMatrix(l.position, l.position + l.direction,
-                                     std::fabs(l.direction.y) < 0.99f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0));
+            if (!(l.cutoffAngle > 0.0f && l.cutoffAngle <= 90.0f))
+                fail(child(ptr, "cutoff_angle"), "must be in (0, 90]");
+            l.toWorld = lookAtMatrix(
+                l.position, l.position + l.direction,
+                std::fabs(l.direction.y) < 0.99f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0));
         } else if (type == "directional") {
-            checkKeys(j, ptr, "directional light", {"type", "direction", "irradiance", "caustic_emitter"});
+            checkKeys(j, ptr, "directional light",
+                      {"type", "direction", "irradiance", "caustic_emitter"});
             l.type = LightType::Directional;
             glm::vec3 d = requiredVec3(j, ptr, "direction");
             if (glm::length(d) == 0.0f) fail(child(ptr, "direction"), "direction is zero");
             l.direction = glm::normalize(d);
             l.intensity = color(j, ptr, "irradiance", glm::vec3(1.0f));
         } else if (type == "envmap") {
-            checkKeys(j, ptr, "envmap light", {"type", "file", "scale", "transform", "caustic_emitter"});
+            checkKeys(j, ptr, "envmap light",
+                      {"type", "file", "scale", "transform", "caustic_emitter"});
             envmap(j, ptr, l);
         } else if (type == "constant") {
             checkKeys(j, ptr, "constant light", {"type", "radiance", "caustic_emitter"});
@@ -629,8 +721,10 @@ private:
             l.intensity = color(j, ptr, "radiance", glm::vec3(1.0f));
         } else {
             fail(find(j, "type") ? child(ptr, "type") : ptr,
-                 "light 'type' must be point, spot, directional, envmap or constant (area lights are "
-                 "shapes with an 'emission'); got '" + type + "'");
+                 "light 'type' must be point, spot, directional, envmap or constant (area lights "
+                 "are "
+                 "shapes with an 'emission'); got '" +
+                     type + "'");
         }
         if (boolean(j, ptr, "caustic_emitter", false)) l.flags |= kCausticEmitter;
         mScene.lights.push_back(l);
@@ -638,14 +732,19 @@ private:
     void envmap(const json& j, const std::string& ptr, Light& l) {
         l.type = LightType::Environment;
         std::string path = file(j, ptr, "file");
-        if (!fs::exists(path)) fail(child(ptr, "file"), fmt::format("environment map not found: '{}'", path));
-        l.envTexture = detail::addBitmapTexture(mScene, path, false, glm::vec2(1.0f), mSrc.where(ptr));
+        if (!fs::exists(path))
+            fail(child(ptr, "file"), fmt::format("environment map not found: '{}'", path));
+        l.envTexture =
+            detail::addBitmapTexture(mScene, path, false, glm::vec2(1.0f), mSrc.where(ptr));
         if (l.envTexture < 0) fail(ptr, "cannot read environment map '" + path + "'");
         l.scale = number(j, ptr, "scale", 1.0f);
-        if (const json* t = find(j, "transform")) l.toWorld = transform(*t, child(ptr, "transform"));
+        if (const json* t = find(j, "transform"))
+            l.toWorld = transform(*t, child(ptr, "transform"));
     }
     void addEnvironment(const json& j, const std::string& ptr) {
-        if (!j.is_object()) fail(ptr, "'environment' must be {\"file\", \"scale\", \"transform\"} or {\"radiance\"}");
+        if (!j.is_object())
+            fail(ptr,
+                 "'environment' must be {\"file\", \"scale\", \"transform\"} or {\"radiance\"}");
         Light l;
         if (find(j, "radiance")) {
             checkKeys(j, ptr, "environment", {"radiance"});
@@ -662,8 +761,8 @@ private:
     void addCamera(const json& j, const std::string& ptr) {
         if (!j.is_object()) fail(ptr, "'camera' must be an object");
         checkKeys(j, ptr, "camera",
-                  {"type", "origin", "target", "up", "transform", "fov", "aperture_radius", "focus_distance",
-                   "shutter", "film", "path"});
+                  {"type", "origin", "target", "up", "transform", "fov", "aperture_radius",
+                   "focus_distance", "shutter", "film", "path"});
         Camera& c = mScene.camera;
         c = Camera{};
         std::string type = string(j, ptr, "type", "pinhole");
@@ -674,14 +773,16 @@ private:
             if (!(c.focusDistance > 0.0f)) fail(child(ptr, "focus_distance"), "must be positive");
             if (c.apertureRadius < 0.0f) fail(child(ptr, "aperture_radius"), "must be >= 0");
         } else if (type != "pinhole") {
-            fail(child(ptr, "type"), "camera 'type' must be pinhole or thin_lens, got '" + type + "'");
+            fail(child(ptr, "type"),
+                 "camera 'type' must be pinhole or thin_lens, got '" + type + "'");
         } else if (find(j, "aperture_radius") || find(j, "focus_distance")) {
             fail(ptr, "aperture_radius/focus_distance need \"type\": \"thin_lens\"");
         }
         // The Loom fov is vertical.
         c.fovAxis = Camera::FovAxis::Y;
         c.fov = number(j, ptr, "fov", 40.0f);
-        if (!(c.fov > 0.0f && c.fov < 180.0f)) fail(child(ptr, "fov"), "'fov' must be in (0, 180) degrees");
+        if (!(c.fov > 0.0f && c.fov < 180.0f))
+            fail(child(ptr, "fov"), "'fov' must be in (0, 180) degrees");
         glm::vec3 origin(0, 0, 5), target(0), up(0, 1, 0);
         if (find(j, "transform")) {
             if (find(j, "origin") || find(j, "target") || find(j, "up"))
@@ -708,8 +809,10 @@ private:
         }
         if (const json* path = find(j, "path")) {
             std::string pp = child(ptr, "path");
-            if (!path->is_array() || path->empty()) fail(pp, "'path' must be a non-empty array of keyframes");
-            if (find(j, "transform")) fail(pp, "a camera path needs origin/target/up, not 'transform'");
+            if (!path->is_array() || path->empty())
+                fail(pp, "'path' must be a non-empty array of keyframes");
+            if (find(j, "transform"))
+                fail(pp, "a camera path needs origin/target/up, not 'transform'");
             for (size_t i = 0; i < path->size(); ++i) {
                 const json& k = (*path)[i];
                 std::string kp = fmt::format("{}/{}", pp, i);

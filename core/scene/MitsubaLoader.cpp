@@ -57,7 +57,8 @@ std::string camelToSnake(const std::string& s) {
         char c = s[i];
         bool upper = std::isupper(static_cast<unsigned char>(c));
         if (upper && i > 0 &&
-            (std::islower(static_cast<unsigned char>(s[i - 1])) || std::isdigit(static_cast<unsigned char>(s[i - 1]))))
+            (std::islower(static_cast<unsigned char>(s[i - 1])) ||
+             std::isdigit(static_cast<unsigned char>(s[i - 1]))))
             r += '_';
         r += char(std::tolower(static_cast<unsigned char>(c)));
     }
@@ -65,22 +66,22 @@ std::string camelToSnake(const std::string& s) {
 }
 
 std::string toLower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     return s;
 }
 
 bool isPropertyTag(const std::string& tag) {
-    static const std::set<std::string> kTags = {"float", "integer", "boolean", "string", "rgb",
-                                                "srgb", "spectrum", "point", "vector", "transform",
-                                                "blackbody", "animation"};
+    static const std::set<std::string> kTags = {"float",  "integer",   "boolean",   "string",
+                                                "rgb",    "srgb",      "spectrum",  "point",
+                                                "vector", "transform", "blackbody", "animation"};
     return kTags.count(tag) > 0;
 }
 
 bool isObjectTag(const std::string& tag) {
     static const std::set<std::string> kTags = {
-        "bsdf",  "emitter", "texture",    "ref",    "medium", "shape",  "sensor",
-        "film",  "sampler", "rfilter",    "phase",  "volume", "integrator",
-        "subsurface"};
+        "bsdf", "emitter", "texture", "ref",   "medium", "shape",      "sensor",
+        "film", "sampler", "rfilter", "phase", "volume", "integrator", "subsurface"};
     return kTags.count(tag) > 0;
 }
 
@@ -128,16 +129,17 @@ private:
 
 class MitsubaLoader {
 public:
-    explicit MitsubaLoader(Scene& scene) : mScene(scene) {}
+    MitsubaLoader(Scene& scene, const std::map<std::string, std::string>& defines)
+        : mScene(scene), mDefaults(defines) {}
 
     void load(const std::string& path) {
         XmlFile& file = parseFile(path);
         pugi::xml_node root = file.doc.document_element();
-        if (std::string(root.name()) != "scene")
-            fail(root, "expected <scene> as the root element");
+        if (std::string(root.name()) != "scene") fail(root, "expected <scene> as the root element");
         processChildren(root);
         if (!mHaveCamera) {
-            addWarning(mScene, path + ": no <sensor>; using a default camera in front of the scene");
+            addWarning(mScene,
+                       path + ": no <sensor>; using a default camera in front of the scene");
             detail::setDefaultCamera(mScene);
         }
     }
@@ -229,15 +231,19 @@ public:
             if (value.size() != 7) fail(node, "expected a colour '#rrggbb', got '" + value + "'");
             glm::vec3 c;
             for (int i = 0; i < 3; ++i)
-                c[i] = srgbDecode(float(std::stoi(value.substr(1 + 2 * i, 2), nullptr, 16)) / 255.0f);
+                c[i] =
+                    srgbDecode(float(std::stoi(value.substr(1 + 2 * i, 2), nullptr, 16)) / 255.0f);
             return c;
         }
         if (tag == "rgb" || tag == "srgb") {
             std::vector<float> v = parseNumbers(node, "value");
             glm::vec3 c;
-            if (v.size() == 1) c = glm::vec3(v[0]);
-            else if (v.size() == 3) c = {v[0], v[1], v[2]};
-            else fail(node, "attribute 'value': expected 1 or 3 numbers, got '" + value + "'");
+            if (v.size() == 1)
+                c = glm::vec3(v[0]);
+            else if (v.size() == 3)
+                c = {v[0], v[1], v[2]};
+            else
+                fail(node, "attribute 'value': expected 1 or 3 numbers, got '" + value + "'");
             if (tag == "srgb") c = {srgbDecode(c.x), srgbDecode(c.y), srgbDecode(c.z)};
             return c;
         }
@@ -255,7 +261,8 @@ public:
             std::string item;
             while (std::getline(ss, item, ',')) {
                 auto colon = item.find(':');
-                if (colon == std::string::npos) fail(node, "malformed 'wavelength:value' pair '" + item + "'");
+                if (colon == std::string::npos)
+                    fail(node, "malformed 'wavelength:value' pair '" + item + "'");
                 float lambda = std::strtof(item.substr(0, colon).c_str(), nullptr);
                 float v = std::strtof(item.substr(colon + 1).c_str(), nullptr);
                 if (lambda >= 380.0f && lambda <= 780.0f) {
@@ -285,14 +292,16 @@ public:
                 t = glm::scale(glm::mat4(1.0f), parseVec3(op, 1.0f));
             } else if (tag == "rotate") {
                 glm::vec3 axis = parseVec3(op, 0.0f);
-                if (glm::length(axis) == 0.0f) fail(op, "rotation axis is zero (set x, y, z or value)");
+                if (glm::length(axis) == 0.0f)
+                    fail(op, "rotation axis is zero (set x, y, z or value)");
                 t = glm::rotate(glm::mat4(1.0f), glm::radians(parseNumber(op, "angle")),
                                 glm::normalize(axis));
             } else if (tag == "matrix") {
                 std::vector<float> v = parseNumbers(op, "value");
                 if (v.size() == 16) {
                     for (int r = 0; r < 4; ++r)
-                        for (int c = 0; c < 4; ++c) t[c][r] = v[size_t(r * 4 + c)];  // row-major text
+                        for (int c = 0; c < 4; ++c)
+                            t[c][r] = v[size_t(r * 4 + c)];  // row-major text
                 } else if (v.size() == 9) {
                     for (int r = 0; r < 3; ++r)
                         for (int c = 0; c < 3; ++c) t[c][r] = v[size_t(r * 3 + c)];
@@ -306,7 +315,8 @@ public:
                         return glm::vec3(0.0f);
                     }
                     std::vector<float> v = parseNumbers(op, a);
-                    if (v.size() != 3) fail(op, fmt::format("attribute '{}': expected 3 numbers", a));
+                    if (v.size() != 3)
+                        fail(op, fmt::format("attribute '{}': expected 3 numbers", a));
                     return {v[0], v[1], v[2]};
                 };
                 glm::vec3 origin = vec("origin", true), target = vec("target", true);
@@ -314,8 +324,9 @@ public:
                 if (glm::length(target - origin) == 0.0f) fail(op, "origin and target coincide");
                 t = lookAtMatrix(origin, target, up);
             } else {
-                fail(op, "unknown transform operation (expected translate, scale, rotate, matrix "
-                         "or lookat)");
+                fail(op,
+                     "unknown transform operation (expected translate, scale, rotate, matrix "
+                     "or lookat)");
             }
             m = t * m;  // Mitsuba applies the operations in document order
         }
@@ -337,7 +348,8 @@ public:
                 }
                 known += (known.empty() ? "" : ", ") + k;
             }
-            fail(ref, fmt::format("unknown id '{}' (defined ids: {})", id, known.empty() ? "none" : known));
+            fail(ref, fmt::format("unknown id '{}' (defined ids: {})", id,
+                                  known.empty() ? "none" : known));
         }
         return it->second;
     }
@@ -368,7 +380,8 @@ public:
             glm::mat4 m = p.getTransform("to_uv");
             uvScale = {m[0][0], m[1][1]};
             if (m[1][0] != 0.0f || m[0][1] != 0.0f || m[3][0] != 0.0f || m[3][1] != 0.0f)
-                warn(p.get("to_uv"), "only the scale of to_uv is supported; rotation/translation ignored");
+                warn(p.get("to_uv"),
+                     "only the scale of to_uv is supported; rotation/translation ignored");
         }
         // Mitsuba 0.5 uv transform attributes.
         uvScale.x *= p.getFloat("uscale", 1.0f);
@@ -396,7 +409,8 @@ public:
             index = int(mScene.textures.size() - 1);
             fallback = detail::textureAverage(t);
         } else {
-            warn(node, "texture type '" + type + "' is not supported; using a constant 0.5 instead");
+            warn(node,
+                 "texture type '" + type + "' is not supported; using a constant 0.5 instead");
         }
         p.reportUnused({"filter_type", "wrap_mode", "wrap_mode_u", "wrap_mode_v", "format",
                         "max_anisotropy", "cache", "accurate", "filter_type"});
@@ -420,7 +434,8 @@ public:
         if (std::string(node.name()) != "bsdf") fail(node, "expected a <bsdf>");
         const void* key = node.internal_object();
         auto it = mBuiltMaterials.find(key);
-        if (it == mBuiltMaterials.end()) it = mBuiltMaterials.emplace(key, buildMaterial(node)).first;
+        if (it == mBuiltMaterials.end())
+            it = mBuiltMaterials.emplace(key, buildMaterial(node)).first;
         return it->second;
     }
     // Index into Scene::materials of a <bsdf> used by a shape (added on first use).
@@ -438,7 +453,8 @@ public:
         std::vector<pugi::xml_node> r;
         for (pugi::xml_node o : p.objects()) {
             pugi::xml_node target = deref(o);
-            if (std::string(target.name()) == "bsdf") r.push_back(o);
+            if (std::string(target.name()) == "bsdf")
+                r.push_back(o);
             else if (std::string(target.name()) != "texture")
                 warn(o, "unexpected element inside a bsdf; ignored");
         }
@@ -448,16 +464,24 @@ public:
         std::vector<pugi::xml_node> nested = nestedBsdfs(p);
         if (nested.empty()) fail(p.node(), wrapper + " needs a nested <bsdf>");
         if (nested.size() > 1)
-            warn(p.node(), fmt::format("{} nested bsdfs; Loom uses the first one only", nested.size()));
+            warn(p.node(),
+                 fmt::format("{} nested bsdfs; Loom uses the first one only", nested.size()));
         return builtMaterial(nested[0]);
     }
 
+    // Wrappers (twosided, normalmap, ...) copy their nested material; the wrapper's id names it.
     Material buildMaterial(pugi::xml_node node) {
+        Material m = buildMaterialOf(node);
+        if (node.attribute("id")) m.name = node.attribute("id").value();
+        return m;
+    }
+    Material buildMaterialOf(pugi::xml_node node) {
         Props p(*this, node);
         std::string type = node.attribute("type").value();
         Material m;
-        m.name = node.attribute("id") ? node.attribute("id").value()
-                                      : fmt::format("{}@{}", type, fileOf(node).line(node.offset_debug()));
+        m.name = node.attribute("id")
+                     ? node.attribute("id").value()
+                     : fmt::format("{}@{}", type, fileOf(node).line(node.offset_debug()));
         auto distribution = [&](const char* def) {
             std::string d = p.getString("distribution", def);
             if (d == "ggx") return Microfacet::GGX;
@@ -471,11 +495,13 @@ public:
                 float au = p.getFloat("alpha_u", 0.1f), av = p.getFloat("alpha_v", 0.1f);
                 if (au != av)
                     warn(node, fmt::format("anisotropic roughness (alpha_u {}, alpha_v {}) is not "
-                                           "supported; using the average {}", au, av, 0.5f * (au + av)));
+                                           "supported; using the average {}",
+                                           au, av, 0.5f * (au + av)));
                 return 0.5f * (au + av);
             }
             pugi::xml_node a = p.get("alpha");
-            if (a && std::string(a.name()) != "float") return p.getColor("alpha", glm::vec3(0.1f)).x;
+            if (a && std::string(a.name()) != "float")
+                return p.getColor("alpha", glm::vec3(0.1f)).x;
             return p.getFloat("alpha", 0.1f);
         };
         auto dielectricEta = [&](float intDefault) {
@@ -486,12 +512,14 @@ public:
             bool hasEta = p.has("eta") || p.has("k");
             std::string material = p.getString("material", hasEta ? "" : "Cu");
             if (hasEta) {
-                if (!material.empty()) warn(p.get("material"), "both material and eta/k given; using eta/k");
+                if (!material.empty())
+                    warn(p.get("material"), "both material and eta/k given; using eta/k");
                 m.conductorEta = p.getColor("eta", glm::vec3(0.0f));
                 m.conductorK = p.getColor("k", glm::vec3(1.0f));
             } else if (!detail::conductorIor(material, m.conductorEta, m.conductorK)) {
                 warn(p.get("material"), fmt::format("unknown conductor '{}' (known: {}); using a "
-                                                    "perfect mirror", material, detail::conductorNames()));
+                                                    "perfect mirror",
+                                                    material, detail::conductorNames()));
                 m.conductorEta = glm::vec3(0.0f);
                 m.conductorK = glm::vec3(1.0f);
             }
@@ -526,10 +554,11 @@ public:
                 m.distribution = distribution("beckmann");
                 m.alpha = roughness();
             } else if (type == "thindielectric") {
-                warn(node, fmt::format("thindielectric approximated as a smooth dielectric with "
-                                       "eta = 1 (light passes straight through; the sheet's ~{:.0f}% "
-                                       "Fresnel reflection is dropped)",
-                                       100.0f * 2.0f * std::pow((m.eta - 1) / (m.eta + 1), 2.0f)));
+                warn(node,
+                     fmt::format("thindielectric approximated as a smooth dielectric with "
+                                 "eta = 1 (light passes straight through; the sheet's ~{:.0f}% "
+                                 "Fresnel reflection is dropped)",
+                                 100.0f * 2.0f * std::pow((m.eta - 1) / (m.eta + 1), 2.0f)));
                 m.eta = 1.0f;
             }
         } else if (type == "conductor" || type == "roughconductor") {
@@ -561,18 +590,19 @@ public:
             if (p.has("filename")) {
                 std::string path = resolve(p.getString("filename", ""));
                 tex = detail::addBitmapTexture(mScene, path, true, glm::vec2(tiles),
-                                               fmt::format("{}: {}", where(node), describe(node)));
+                                               fmt::format("{}: {}", where(node), describe(node)),
+                                               "the nested bsdf is used without a normal map");
             } else if (p.has("normalmap")) {
                 tex = texture(p.get("normalmap"), true, unused);
+                if (tex < 0)
+                    warn(node, "normal map unavailable; the nested bsdf is used without it");
             } else {
                 fail(node, "missing property 'filename' (SMS normalmap) or texture 'normalmap'");
             }
+            m.normalMapUseSlopes = p.getBool("use_slopes", true);
             if (tex >= 0) {
                 m.normalMap = tex;
-                m.normalMapUseSlopes = p.getBool("use_slopes", true);
                 m.name += "+normalmap";
-            } else {
-                warn(node, "normal map unavailable; the nested bsdf is used without it");
             }
             p.reportUnused({"lean_fallback", "lean_fallback_alpha", "lean_fallback_material"});
             return m;
@@ -608,7 +638,8 @@ public:
             m.reflectance = r.value;
             m.reflectanceTexture = r.texture;
             m.specularReflectance = p.getColor("specular_reflectance", glm::vec3(0.2f));
-            warn(node, fmt::format("phong approximated as roughplastic (beckmann alpha {:.3f})", m.alpha));
+            warn(node, fmt::format("phong approximated as roughplastic (beckmann alpha {:.3f})",
+                                   m.alpha));
         } else if (type == "principled") {
             // Closest Loom lobe: metal -> rough conductor tinted by base_color, transmissive ->
             // rough dielectric, otherwise a rough plastic with the base colour underneath.
@@ -633,12 +664,14 @@ public:
                 m.reflectance = base.value;
                 m.reflectanceTexture = base.texture;
             }
-            warn(node, fmt::format("principled approximated as {} (alpha = roughness^2 = {:.3f}); "
-                                   "sheen, clearcoat, anisotropy and specular tint are dropped",
-                                   m.type == BsdfType::RoughConductor    ? "roughconductor"
-                                   : m.type == BsdfType::RoughDielectric ? "roughdielectric"
-                                                                         : "roughplastic",
-                                   m.alpha));
+            warn(node,
+                 fmt::format("principled approximated as {} (metallic {:.3g} and spec_trans "
+                             "{:.3g} snapped to 0 or 1, alpha = roughness^2 = {:.3f}); sheen, "
+                             "clearcoat, anisotropy and specular tint are dropped",
+                             m.type == BsdfType::RoughConductor    ? "roughconductor"
+                             : m.type == BsdfType::RoughDielectric ? "roughdielectric"
+                                                                   : "roughplastic",
+                             metallic, specTrans, m.alpha));
             p.reportUnused({"specular", "spec_tint", "sheen", "sheen_tint", "clearcoat",
                             "clearcoat_gloss", "anisotropic", "flatness", "diff_trans"});
             return m;
@@ -684,7 +717,8 @@ public:
             if (file.empty()) fail(node, "missing property 'filename'");
             std::string path = resolve(file);
             if (!fs::exists(path))
-                fail(p.get("filename"), fmt::format("mesh file not found: '{}' (tried '{}')", file, path));
+                fail(p.get("filename"),
+                     fmt::format("mesh file not found: '{}' (tried '{}')", file, path));
             bool flipTex = p.getBool("flip_tex_coords", true);
             shape.name = fs::path(file).stem().string();
             shape.mesh = meshIndex(path + variant + (flipTex ? "|ft" : ""), [&] {
@@ -710,14 +744,17 @@ public:
             shape.mesh = meshIndex(type + variant, [&] { return finishMesh(makeSphere(), true); });
         } else if (type == "cylinder") {
             shape.name = type;
-            glm::vec3 p0 = p.getVector("p0", glm::vec3(0.0f)), p1 = p.getVector("p1", glm::vec3(0, 0, 1));
+            glm::vec3 p0 = p.getVector("p0", glm::vec3(0.0f)),
+                      p1 = p.getVector("p1", glm::vec3(0, 0, 1));
             float radius = p.getFloat("radius", 1.0f);
             if (glm::length(p1 - p0) == 0.0f) fail(node, "p0 and p1 coincide");
             shape.toWorld = shape.toWorld * cylinderTransform(p0, p1, radius);
-            shape.mesh = meshIndex(type + variant, [&] { return finishMesh(makeCylinder(), true); });
+            shape.mesh =
+                meshIndex(type + variant, [&] { return finishMesh(makeCylinder(), true); });
         } else if (type == "serialized") {
-            warn(node, "the Mitsuba 'serialized' mesh format is not supported; shape skipped "
-                       "(convert it to .ply or .obj)");
+            warn(node,
+                 "the Mitsuba 'serialized' mesh format is not supported; shape skipped "
+                 "(convert it to .ply or .obj)");
             return;
         } else {
             warn(node, "shape type '" + type + "' is not supported; shape skipped");
@@ -730,8 +767,10 @@ public:
             pugi::xml_node target = deref(o);
             std::string tag = target.name();
             if (tag == "bsdf") {
-                if (shape.material >= 0) warn(o, "more than one bsdf; using the first");
-                else shape.material = materialIndex(o);
+                if (shape.material >= 0)
+                    warn(o, "more than one bsdf; using the first");
+                else
+                    shape.material = materialIndex(o);
             } else if (tag == "emitter") {
                 areaEmitter(target, shape);
             } else if (tag == "medium") {
@@ -823,8 +862,9 @@ public:
             if (file.empty()) fail(node, "missing property 'filename'");
             light.scale = p.getFloat("scale", 1.0f);
             light.toWorld = toWorld;
-            light.envTexture = detail::addBitmapTexture(mScene, resolve(file), false, glm::vec2(1.0f),
-                                                        fmt::format("{}: {}", where(node), describe(node)));
+            light.envTexture =
+                detail::addBitmapTexture(mScene, resolve(file), false, glm::vec2(1.0f),
+                                         fmt::format("{}: {}", where(node), describe(node)));
             if (light.envTexture < 0) {
                 light.type = LightType::Constant;
                 light.intensity = glm::vec3(0.5f);
@@ -861,7 +901,8 @@ public:
             cam.apertureRadius = p.getFloat("aperture_radius", 0.0f);
             cam.focusDistance = p.getFloat("focus_distance", 1.0f);
         } else if (type != "perspective") {
-            warn(node, "sensor type '" + type + "' is not supported; approximated as a perspective camera");
+            warn(node, "sensor type '" + type +
+                           "' is not supported; approximated as a perspective camera");
         }
         // Film first: the fov conversions below need its aspect ratio.
         for (pugi::xml_node o : p.objects()) {
@@ -871,11 +912,13 @@ public:
                 Props f(*this, target);
                 cam.filmWidth = uint32_t(f.getInt("width", 768));
                 cam.filmHeight = uint32_t(f.getInt("height", 576));
-                f.reportUnused({"crop_offset_x", "crop_offset_y", "crop_width", "crop_height",
-                                "file_format", "pixel_format", "component_format", "rfilter",
-                                "gamma", "banner", "high_quality_edges", "sample_border",
-                                "compensate", "tonemap_method", "exposure", "key", "burn",
-                                "attach_log", "write_log", "dither", "label", "sample_count"});
+                f.reportUnused(
+                    {"crop_offset_x", "crop_offset_y",  "crop_width",         "crop_height",
+                     "file_format",   "pixel_format",   "component_format",   "rfilter",
+                     "gamma",         "banner",         "high_quality_edges", "sample_border",
+                     "compensate",    "tonemap_method", "exposure",           "key",
+                     "burn",          "attach_log",     "write_log",          "dither",
+                     "label",         "sample_count"});
             } else if (tag == "sampler") {
                 debug(target, "samplers are chosen by the render graph; ignored");
             } else {
@@ -883,8 +926,9 @@ public:
             }
         }
         cam.toWorld = p.has("to_world") ? p.getTransform("to_world") : glm::mat4(1.0f);
-        float aspect = cam.filmWidth && cam.filmHeight ? float(cam.filmWidth) / float(cam.filmHeight)
-                                                       : 768.0f / 576.0f;
+        float aspect = cam.filmWidth && cam.filmHeight
+                           ? float(cam.filmWidth) / float(cam.filmHeight)
+                           : 768.0f / 576.0f;
         std::string axis = p.getString("fov_axis", "x");
         float fov = 0.0f;
         if (p.has("fov")) {
@@ -894,22 +938,30 @@ public:
             std::string f = p.getString("focal_length", "50mm");
             float mm = std::strtof(f.c_str(), nullptr);
             if (mm <= 0.0f) fail(p.get("focal_length"), "expected a focal length like '50mm'");
-            fov = glm::degrees(2.0f * std::atan(std::sqrt(36.0f * 36.0f + 24.0f * 24.0f) / (2.0f * mm)));
+            fov = glm::degrees(2.0f *
+                               std::atan(std::sqrt(36.0f * 36.0f + 24.0f * 24.0f) / (2.0f * mm)));
             axis = "diagonal";
         }
-        if (axis == "x") cam.fovAxis = Camera::FovAxis::X;
-        else if (axis == "y") cam.fovAxis = Camera::FovAxis::Y;
-        else if (axis == "smaller") cam.fovAxis = Camera::FovAxis::Smaller;
-        else if (axis == "larger") cam.fovAxis = Camera::FovAxis::Larger;
+        if (axis == "x")
+            cam.fovAxis = Camera::FovAxis::X;
+        else if (axis == "y")
+            cam.fovAxis = Camera::FovAxis::Y;
+        else if (axis == "smaller")
+            cam.fovAxis = Camera::FovAxis::Smaller;
+        else if (axis == "larger")
+            cam.fovAxis = Camera::FovAxis::Larger;
         else if (axis == "diagonal") {
             // Convert to the x axis: tan(fx/2) = tan(fd/2) * w / sqrt(w^2 + h^2).
-            float t = std::tan(glm::radians(fov) * 0.5f) * aspect / std::sqrt(aspect * aspect + 1.0f);
+            float t =
+                std::tan(glm::radians(fov) * 0.5f) * aspect / std::sqrt(aspect * aspect + 1.0f);
             fov = glm::degrees(2.0f * std::atan(t));
             cam.fovAxis = Camera::FovAxis::X;
         } else {
-            fail(p.get("fov_axis"), "expected x, y, smaller, larger or diagonal, got '" + axis + "'");
+            fail(p.get("fov_axis"),
+                 "expected x, y, smaller, larger or diagonal, got '" + axis + "'");
         }
-        if (!(fov > 0.0f && fov < 180.0f)) fail(node, fmt::format("fov must be in (0, 180), got {}", fov));
+        if (!(fov > 0.0f && fov < 180.0f))
+            fail(node, fmt::format("fov must be in (0, 180), got {}", fov));
         cam.fov = fov;
         if (p.has("principal_point_offset_x") || p.has("principal_point_offset_y")) {
             p.get("principal_point_offset_x");
@@ -927,14 +979,17 @@ public:
             if (child.type() != pugi::node_element) continue;
             std::string tag = child.name();
             if (tag == "default") continue;  // handled while parsing
-            if (tag == "shape") processShape(child);
-            else if (tag == "emitter") processEmitter(child);
-            else if (tag == "sensor") processSensor(child);
+            if (tag == "shape")
+                processShape(child);
+            else if (tag == "emitter")
+                processEmitter(child);
+            else if (tag == "sensor")
+                processSensor(child);
             else if (tag == "integrator" || tag == "sampler" || tag == "film" || tag == "rfilter") {
                 // Referenced films/samplers (<ref id> in the sensor) are read there.
-                if (!child.attribute("id")) debug(child, "chosen by the render graph in Loom; ignored");
-            }
-            else if (tag == "bsdf" || tag == "texture" || tag == "spectrum" || tag == "rgb") {
+                if (!child.attribute("id"))
+                    debug(child, "chosen by the render graph in Loom; ignored");
+            } else if (tag == "bsdf" || tag == "texture" || tag == "spectrum" || tag == "rgb") {
                 // Built when referenced.
             } else if (tag == "medium" || tag == "phase" || tag == "volume")
                 warn(child, "participating media are not supported; ignored");
@@ -942,13 +997,16 @@ public:
                 std::string file = child.attribute("filename").value();
                 if (file.empty()) fail(child, "missing attribute 'filename'");
                 std::string path = resolve(file);
-                if (!fs::exists(path)) fail(child, fmt::format("included file not found: '{}' (tried '{}')", file, path));
+                if (!fs::exists(path))
+                    fail(child,
+                         fmt::format("included file not found: '{}' (tried '{}')", file, path));
                 XmlFile& inc = parseFile(path);
                 processChildren(inc.doc.document_element());
             } else if (tag == "alias") {
                 mIds[child.attribute("as").value()] = resolveRef(child);
             } else if (tag == "path") {
-                mSearchPaths.push_back(detail::resolvePath(fileOf(child).dir, child.attribute("value").value()));
+                mSearchPaths.push_back(
+                    detail::resolvePath(fileOf(child).dir, child.attribute("value").value()));
             } else {
                 warn(child, "unknown element; ignored");
             }
@@ -991,11 +1049,12 @@ private:
         file->lineStarts.push_back(0);
         for (size_t i = 0; i < file->text.size(); ++i)
             if (file->text[i] == '\n') file->lineStarts.push_back(i + 1);
-        pugi::xml_parse_result result =
-            file->doc.load_buffer(file->text.data(), file->text.size(), pugi::parse_default, pugi::encoding_utf8);
+        pugi::xml_parse_result result = file->doc.load_buffer(
+            file->text.data(), file->text.size(), pugi::parse_default, pugi::encoding_utf8);
         if (!result)
-            throw UserError(fmt::format("{}:{}:{}: XML syntax error: {}", path, file->line(result.offset),
-                                        file->column(result.offset), result.description()));
+            throw UserError(fmt::format("{}:{}:{}: XML syntax error: {}", path,
+                                        file->line(result.offset), file->column(result.offset),
+                                        result.description()));
         mSearchPaths.push_back(file->dir);
         mFiles.push_back(std::move(file));
         XmlFile& f = *mFiles.back();
@@ -1009,7 +1068,8 @@ private:
         if (f.majorVersion < 2) normaliseNames(root);
         for (pugi::xml_node d : root.children("default")) {
             std::string name = d.attribute("name").value();
-            if (name.empty() || !d.attribute("value")) fail(d, "expected attributes 'name' and 'value'");
+            if (name.empty() || !d.attribute("value"))
+                fail(d, "expected attributes 'name' and 'value'");
             mDefaults.emplace(name, d.attribute("value").value());  // the first definition wins
         }
         substitute(root);
@@ -1022,7 +1082,8 @@ private:
         for (pugi::xml_node n : node.children()) {
             if (n.type() != pugi::node_element) continue;
             n.set_name(toLower(n.name()).c_str());
-            if (pugi::xml_attribute a = n.attribute("name"); a && std::string(n.name()) != "default")
+            if (pugi::xml_attribute a = n.attribute("name");
+                a && std::string(n.name()) != "default")
                 a.set_value(camelToSnake(a.value()).c_str());
             normaliseNames(n);
         }
@@ -1043,12 +1104,17 @@ private:
                         continue;
                     }
                     size_t j = i + 1;
-                    while (j < v.size() && (std::isalnum(static_cast<unsigned char>(v[j])) || v[j] == '_')) ++j;
+                    while (j < v.size() &&
+                           (std::isalnum(static_cast<unsigned char>(v[j])) || v[j] == '_'))
+                        ++j;
                     std::string name = v.substr(i + 1, j - i - 1);
                     auto it = mDefaults.find(name);
                     if (name.empty() || it == mDefaults.end())
-                        fail(n, fmt::format("attribute '{}': undefined variable '${}' (define it with "
-                                            "<default name=\"{}\" value=\"...\"/>)", a.name(), name, name));
+                        fail(n,
+                             fmt::format("attribute '{}': undefined variable '${}' (add <default "
+                                         "name=\"{}\" value=\"...\"/> or pass it as a define, like "
+                                         "mitsuba -D{}=...)",
+                                         a.name(), name, name, name));
                     out += it->second;
                     i = j - 1;
                 }
@@ -1066,7 +1132,8 @@ private:
                 std::string id = n.attribute("id").value();
                 auto [it, inserted] = mIds.emplace(id, n);
                 if (!inserted)
-                    fail(n, fmt::format("duplicate id '{}' (first defined at {})", id, where(it->second)));
+                    fail(n, fmt::format("duplicate id '{}' (first defined at {})", id,
+                                        where(it->second)));
             }
             collectIds(n);
         }
@@ -1082,8 +1149,9 @@ Props::Props(MitsubaLoader& loader, pugi::xml_node plugin) : mLoader(loader), mN
         std::string name = c.attribute("name").value();
         if (!name.empty() && (isPropertyTag(tag) || isObjectTag(tag))) {
             if (mNamed.count(name))
-                loader.fail(c, fmt::format("property '{}' is specified more than once (first at {})",
-                                           name, loader.where(mNamed[name])));
+                loader.fail(
+                    c, fmt::format("property '{}' is specified more than once (first at {})", name,
+                                   loader.where(mNamed[name])));
             mNamed[name] = c;
         } else if (isObjectTag(tag)) {
             mObjects.push_back(c);
@@ -1196,17 +1264,19 @@ void Props::reportUnused(std::initializer_list<const char*> quiet) {
         if (mUsed.count(name)) continue;
         bool isQuiet = std::find_if(quiet.begin(), quiet.end(),
                                     [&](const char* q) { return name == q; }) != quiet.end();
-        if (isQuiet) mLoader.debug(node, "not used by Loom");
-        else mLoader.warn(node, "property '" + name + "' is not supported by Loom; ignored");
+        if (isQuiet)
+            mLoader.debug(node, "not used by Loom");
+        else
+            mLoader.warn(node, "property '" + name + "' is not supported by Loom; ignored");
     }
 }
 
 }  // namespace
 
-Scene loadMitsubaScene(const std::string& path) {
+Scene loadMitsubaScene(const std::string& path, const std::map<std::string, std::string>& defines) {
     Scene scene;
     scene.sourceFile = path;
-    MitsubaLoader loader(scene);
+    MitsubaLoader loader(scene, defines);
     loader.load(path);
     return scene;
 }

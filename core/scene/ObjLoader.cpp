@@ -31,7 +31,8 @@ tinyobj::ObjReader parseObj(const std::string& path) {
     if (!reader.ParseFromFile(path, config)) {
         std::string err = reader.Error();
         while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
-        throw UserError(fmt::format("{}: cannot parse OBJ file: {}", path, err.empty() ? "unknown error" : err));
+        throw UserError(fmt::format("{}: cannot parse OBJ file: {}", path,
+                                    err.empty() ? "unknown error" : err));
     }
     return reader;
 }
@@ -80,7 +81,8 @@ private:
         auto [it, inserted] = mMap.emplace(key, uint32_t(mMesh.positions.size()));
         if (!inserted) return it->second;
         if (i.vertex_index < 0 || size_t(i.vertex_index) * 3 + 2 >= mAttrib.vertices.size())
-            throw UserError(fmt::format("{}: face references missing vertex {}", mPath, i.vertex_index + 1));
+            throw UserError(
+                fmt::format("{}: face references missing vertex {}", mPath, i.vertex_index + 1));
         const float* p = &mAttrib.vertices[size_t(i.vertex_index) * 3];
         mMesh.positions.push_back({p[0], p[1], p[2]});
         if (i.normal_index >= 0 && size_t(i.normal_index) * 3 + 2 < mAttrib.normals.size()) {
@@ -103,10 +105,14 @@ private:
     }
 };
 
-float maxComponent(const float* c) { return std::max({c[0], c[1], c[2]}); }
+float maxComponent(const float* c) {
+    return std::max({c[0], c[1], c[2]});
+}
 
 // Phong exponent -> Beckmann alpha with the same lobe width (Walter et al. 2007, Eq. 30).
-float phongToAlpha(float ns) { return std::sqrt(2.0f / (std::max(ns, 0.0f) + 2.0f)); }
+float phongToAlpha(float ns) {
+    return std::sqrt(2.0f / (std::max(ns, 0.0f) + 2.0f));
+}
 
 }  // namespace
 
@@ -155,7 +161,8 @@ Scene loadObjScene(const std::string& path) {
         glm::vec3 ks(t.specular[0], t.specular[1], t.specular[2]);
         glm::vec3 tf(t.transmittance[0], t.transmittance[1], t.transmittance[2]);
         float eta = t.ior > 1.0f ? t.ior : 1.5f;
-        bool glass = t.illum == 4 || t.illum == 6 || t.illum == 7 || t.illum == 9 || t.dissolve < 1.0f;
+        bool glass =
+            t.illum == 4 || t.illum == 6 || t.illum == 7 || t.illum == 9 || t.dissolve < 1.0f;
         if (t.metallic >= 0.5f) {
             m.type = BsdfType::RoughConductor;
             m.distribution = Microfacet::GGX;
@@ -199,12 +206,14 @@ Scene loadObjScene(const std::string& path) {
             }
         }
         if (!t.normal_texname.empty()) {
-            m.normalMap = detail::addBitmapTexture(scene, detail::resolvePath(dir, t.normal_texname),
-                                                   true, glm::vec2(1.0f), ctx + " norm");
+            m.normalMap =
+                detail::addBitmapTexture(scene, detail::resolvePath(dir, t.normal_texname), true,
+                                         glm::vec2(1.0f), ctx + " norm");
             m.normalMapUseSlopes = false;
         }
         if (!t.bump_texname.empty())
-            detail::addWarning(scene, ctx + ": bump maps (map_bump/bump) are not supported; ignored");
+            detail::addWarning(scene,
+                               ctx + ": bump maps (map_bump/bump) are not supported; ignored");
         materials.push_back(m);
         emission.push_back(glm::vec3(t.emission[0], t.emission[1], t.emission[2]));
     }
@@ -250,8 +259,9 @@ Scene loadObjScene(const std::string& path) {
         Light env;
         env.type = LightType::Constant;
         scene.lights.push_back(env);
-        detail::addWarning(scene, path + ": no emissive (Ke) materials; added a constant "
-                                         "environment light of radiance 1");
+        detail::addWarning(scene, path +
+                                      ": no emissive (Ke) materials; added a constant "
+                                      "environment light of radiance 1");
     }
     detail::setDefaultCamera(scene);
     return scene;

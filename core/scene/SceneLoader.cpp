@@ -1,6 +1,7 @@
 #include "core/scene/SceneLoader.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -30,6 +31,20 @@ float srgbToLinear(float v) {
     return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
 }
 
+// sRGB decode with a table for 8-bit values (megapixel textures would otherwise spend seconds
+// in pow()).
+float srgbToLinearFast(float v) {
+    static const std::array<float, 256> kTable = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[size_t(i)] = srgbToLinear(float(i) / 255.0f);
+        return t;
+    }();
+    float scaled = v * 255.0f;
+    long i = std::lround(scaled);
+    if (i >= 0 && i < 256 && std::fabs(scaled - float(i)) < 1e-3f) return kTable[size_t(i)];
+    return srgbToLinear(v);
+}
+
 // A single PLY file as a scene: one grey diffuse shape and the default camera/light.
 Scene loadPlyScene(const std::string& path) {
     Scene scene;
@@ -44,23 +59,29 @@ Scene loadPlyScene(const std::string& path) {
     Light env;
     env.type = LightType::Constant;
     scene.lights.push_back(env);
-    detail::addWarning(scene, path + ": a PLY file has no lights or camera; added a constant "
-                                     "environment light of radiance 1 and a default camera");
+    detail::addWarning(scene, path +
+                                  ": a PLY file has no lights or camera; added a constant "
+                                  "environment light of radiance 1 and a default camera");
     detail::setDefaultCamera(scene);
     return scene;
 }
 
 }  // namespace
 
-Scene loadScene(const std::string& path) {
+Scene loadScene(const std::string& path, const SceneLoadOptions& options) {
     if (!fs::exists(path)) throw UserError(path + ": scene file not found");
     std::string ext = lowerExtension(path);
     Scene scene;
-    if (ext == ".json") scene = loadJsonScene(path);
-    else if (ext == ".xml") scene = loadMitsubaScene(path);
-    else if (ext == ".gltf" || ext == ".glb") scene = loadGltfScene(path);
-    else if (ext == ".obj") scene = loadObjScene(path);
-    else if (ext == ".ply") scene = loadPlyScene(path);
+    if (ext == ".json")
+        scene = loadJsonScene(path);
+    else if (ext == ".xml")
+        scene = loadMitsubaScene(path, options.defines);
+    else if (ext == ".gltf" || ext == ".glb")
+        scene = loadGltfScene(path);
+    else if (ext == ".obj")
+        scene = loadObjScene(path);
+    else if (ext == ".ply")
+        scene = loadPlyScene(path);
     else
         throw UserError(path + ": unknown scene format '" + ext +
                         "' (expected .json, .xml, .gltf, .glb, .obj or .ply)");
@@ -83,7 +104,7 @@ std::string resolvePath(const std::string& baseDir, const std::string& file) {
 }
 
 int addBitmapTexture(Scene& scene, const std::string& path, bool raw, glm::vec2 uvScale,
-                     const std::string& context) {
+                     const std::string& context, const std::string& fallback) {
     for (size_t i = 0; i < scene.textures.size(); ++i) {
         const Texture& t = scene.textures[i];
         if (t.kind == TextureKind::Bitmap && t.path == path && t.isNormalMap == raw &&
@@ -91,16 +112,16 @@ int addBitmapTexture(Scene& scene, const std::string& path, bool raw, glm::vec2 
             return int(i);
     }
     if (!fs::exists(path)) {
-        addWarning(scene, fmt::format("{}: texture file not found: '{}'; using a constant instead",
-                                      context, path));
+        addWarning(scene,
+                   fmt::format("{}: texture file not found: '{}'; {}", context, path, fallback));
         return -1;
     }
     ImageData image;
     try {
         image = readImage(path, false);
     } catch (const UserError& e) {
-        addWarning(scene, fmt::format("{}: cannot read texture '{}' ({}); using a constant instead",
-                                      context, path, e.what()));
+        addWarning(scene, fmt::format("{}: cannot read texture '{}' ({}); {}", context, path,
+                                      e.what(), fallback));
         return -1;
     }
     // Colour textures in LDR formats are sRGB-encoded whatever their bit depth; float formats
@@ -133,7 +154,7 @@ int addBitmapTexture(Scene& scene, const std::string& path, bool raw, glm::vec2 
             rgba[3] = c == 2 ? src[1] : 1.0f;
         }
         if (!raw && ldr)
-            for (int k = 0; k < 3; ++k) rgba[k] = srgbToLinear(rgba[k]);
+            for (int k = 0; k < 3; ++k) rgba[k] = srgbToLinearFast(rgba[k]);
         std::copy(rgba, rgba + 4, tex.rgba.data() + p * 4);
     }
     scene.textures.push_back(std::move(tex));
@@ -162,29 +183,75 @@ struct ConductorEntry {
 // (peaks near 650/550/450 nm), as tabulated in Tungsten's ComplexIorData and used by
 // Bitterli's scene conversions (e.g. Al, Cr in veach-ajar/staircase; VN in veach-bidir).
 const ConductorEntry kConductors[] = {
-    {"a-C", {2.9440999183f, 2.2271502925f, 1.9681668794f}, {0.8874329109f, 0.7993216383f, 0.8152862927f}},
-    {"Ag", {0.1552646489f, 0.1167232965f, 0.1383806959f}, {4.8283433224f, 3.1222459278f, 2.1469504455f}},
-    {"Al", {1.6574599595f, 0.8803689579f, 0.5212287346f}, {9.2238691996f, 6.2695232477f, 4.8370012281f}},
-    {"Au", {0.1431189557f, 0.3749570432f, 1.4424785571f}, {3.9831604247f, 2.3857207478f, 1.6032152899f}},
-    {"Be", {4.1850592788f, 3.1850604423f, 2.7840913457f}, {3.8354398268f, 3.0101260162f, 2.8690088743f}},
-    {"Cr", {4.3696828663f, 2.9167024892f, 1.6547005413f}, {5.2064337956f, 4.2313645277f, 3.7549467933f}},
-    {"Cu", {0.2004376970f, 0.9240334304f, 1.1022119527f}, {3.9129485033f, 2.4528477015f, 2.1421879552f}},
-    {"Hg", {2.3989314904f, 1.4400254917f, 0.9095512090f}, {6.3276269444f, 4.3719414152f, 3.4217899270f}},
-    {"Ir", {3.0864098394f, 2.0821938440f, 1.6178866805f}, {5.5921510077f, 4.0671757150f, 3.2672611269f}},
-    {"K", {0.0640493070f, 0.0464100621f, 0.0381842017f}, {2.1042155920f, 1.3489364357f, 0.9132113889f}},
-    {"Li", {0.2657871942f, 0.1956102432f, 0.2209198538f}, {3.5401743407f, 2.3111306542f, 1.6685930000f}},
-    {"Mo", {4.4837010280f, 3.5254578255f, 2.7760769438f}, {4.1111307988f, 3.4208716252f, 3.1506031404f}},
-    {"Na", {0.0602665320f, 0.0561412435f, 0.0619909494f}, {3.1792906496f, 2.1124800781f, 1.5790940266f}},
-    {"Nb", {3.4201353595f, 2.7901921379f, 2.3955856658f}, {3.4413817900f, 2.7376437930f, 2.5799132708f}},
-    {"Ni", {2.3672753521f, 1.6633583302f, 1.4670554172f}, {4.4988329911f, 3.0501643957f, 2.3454274399f}},
-    {"Rh", {2.5857954933f, 1.8601866068f, 1.5544279524f}, {6.7822927110f, 4.7029501026f, 3.9760892461f}},
-    {"Ta", {2.0625846607f, 2.3930915569f, 2.6280684948f}, {2.4080467973f, 1.7413705864f, 1.9470377016f}},
-    {"TiC", {3.7004673762f, 2.8374356509f, 2.5823030278f}, {3.2656905818f, 2.3515586388f, 2.1727857800f}},
-    {"TiN", {1.6484691607f, 1.1504482522f, 1.3797795097f}, {3.3684596226f, 1.9434888540f, 1.1020123347f}},
-    {"V", {4.2775126218f, 3.5131538236f, 2.7611257461f}, {3.4911844504f, 2.8893580874f, 3.1116965117f}},
-    {"VC", {3.6575665991f, 2.7527298065f, 2.5326814570f}, {3.0683516659f, 2.1986687713f, 1.9631816252f}},
-    {"VN", {2.8656011588f, 2.1191817791f, 1.9400767149f}, {3.0323264950f, 2.0561075580f, 1.6162930914f}},
-    {"W", {4.3707029924f, 3.3002972445f, 2.9982666528f}, {3.5006778591f, 2.6048652781f, 2.2731930614f}},
+    {"a-C",
+     {2.9440999183f, 2.2271502925f, 1.9681668794f},
+     {0.8874329109f, 0.7993216383f, 0.8152862927f}},
+    {"Ag",
+     {0.1552646489f, 0.1167232965f, 0.1383806959f},
+     {4.8283433224f, 3.1222459278f, 2.1469504455f}},
+    {"Al",
+     {1.6574599595f, 0.8803689579f, 0.5212287346f},
+     {9.2238691996f, 6.2695232477f, 4.8370012281f}},
+    {"Au",
+     {0.1431189557f, 0.3749570432f, 1.4424785571f},
+     {3.9831604247f, 2.3857207478f, 1.6032152899f}},
+    {"Be",
+     {4.1850592788f, 3.1850604423f, 2.7840913457f},
+     {3.8354398268f, 3.0101260162f, 2.8690088743f}},
+    {"Cr",
+     {4.3696828663f, 2.9167024892f, 1.6547005413f},
+     {5.2064337956f, 4.2313645277f, 3.7549467933f}},
+    {"Cu",
+     {0.2004376970f, 0.9240334304f, 1.1022119527f},
+     {3.9129485033f, 2.4528477015f, 2.1421879552f}},
+    {"Hg",
+     {2.3989314904f, 1.4400254917f, 0.9095512090f},
+     {6.3276269444f, 4.3719414152f, 3.4217899270f}},
+    {"Ir",
+     {3.0864098394f, 2.0821938440f, 1.6178866805f},
+     {5.5921510077f, 4.0671757150f, 3.2672611269f}},
+    {"K",
+     {0.0640493070f, 0.0464100621f, 0.0381842017f},
+     {2.1042155920f, 1.3489364357f, 0.9132113889f}},
+    {"Li",
+     {0.2657871942f, 0.1956102432f, 0.2209198538f},
+     {3.5401743407f, 2.3111306542f, 1.6685930000f}},
+    {"Mo",
+     {4.4837010280f, 3.5254578255f, 2.7760769438f},
+     {4.1111307988f, 3.4208716252f, 3.1506031404f}},
+    {"Na",
+     {0.0602665320f, 0.0561412435f, 0.0619909494f},
+     {3.1792906496f, 2.1124800781f, 1.5790940266f}},
+    {"Nb",
+     {3.4201353595f, 2.7901921379f, 2.3955856658f},
+     {3.4413817900f, 2.7376437930f, 2.5799132708f}},
+    {"Ni",
+     {2.3672753521f, 1.6633583302f, 1.4670554172f},
+     {4.4988329911f, 3.0501643957f, 2.3454274399f}},
+    {"Rh",
+     {2.5857954933f, 1.8601866068f, 1.5544279524f},
+     {6.7822927110f, 4.7029501026f, 3.9760892461f}},
+    {"Ta",
+     {2.0625846607f, 2.3930915569f, 2.6280684948f},
+     {2.4080467973f, 1.7413705864f, 1.9470377016f}},
+    {"TiC",
+     {3.7004673762f, 2.8374356509f, 2.5823030278f},
+     {3.2656905818f, 2.3515586388f, 2.1727857800f}},
+    {"TiN",
+     {1.6484691607f, 1.1504482522f, 1.3797795097f},
+     {3.3684596226f, 1.9434888540f, 1.1020123347f}},
+    {"V",
+     {4.2775126218f, 3.5131538236f, 2.7611257461f},
+     {3.4911844504f, 2.8893580874f, 3.1116965117f}},
+    {"VC",
+     {3.6575665991f, 2.7527298065f, 2.5326814570f},
+     {3.0683516659f, 2.1986687713f, 1.9631816252f}},
+    {"VN",
+     {2.8656011588f, 2.1191817791f, 1.9400767149f},
+     {3.0323264950f, 2.0561075580f, 1.6162930914f}},
+    {"W",
+     {4.3707029924f, 3.3002972445f, 2.9982666528f},
+     {3.5006778591f, 2.6048652781f, 2.2731930614f}},
     // Perfect mirror: |r| = 1 at every angle for eta = 0, k = 1.
     {"none", {0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f}},
 };
@@ -214,16 +281,17 @@ std::string conductorNames() {
 bool namedIor(const std::string& name, float& ior) {
     // Mitsuba's documented table of named interior/exterior IORs.
     static const std::pair<const char*, float> kIors[] = {
-        {"vacuum", 1.0f},         {"helium", 1.00004f},     {"hydrogen", 1.00013f},
-        {"air", 1.00028f},        {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
-        {"acetone", 1.36f},       {"ethanol", 1.361f},      {"carbon tetrachloride", 1.461f},
-        {"glycerol", 1.4729f},    {"benzene", 1.501f},      {"silicone oil", 1.52045f},
-        {"bromine", 1.661f},      {"water ice", 1.31f},     {"fused quartz", 1.458f},
-        {"pyrex", 1.470f},        {"acrylic glass", 1.49f}, {"polypropylene", 1.49f},
-        {"bk7", 1.5046f},         {"sodium chloride", 1.544f}, {"amber", 1.55f},
-        {"pet", 1.5750f},         {"diamond", 2.419f}};
+        {"vacuum", 1.0f},      {"helium", 1.00004f},         {"hydrogen", 1.00013f},
+        {"air", 1.00028f},     {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
+        {"acetone", 1.36f},    {"ethanol", 1.361f},          {"carbon tetrachloride", 1.461f},
+        {"glycerol", 1.4729f}, {"benzene", 1.501f},          {"silicone oil", 1.52045f},
+        {"bromine", 1.661f},   {"water ice", 1.31f},         {"fused quartz", 1.458f},
+        {"pyrex", 1.470f},     {"acrylic glass", 1.49f},     {"polypropylene", 1.49f},
+        {"bk7", 1.5046f},      {"sodium chloride", 1.544f},  {"amber", 1.55f},
+        {"pet", 1.5750f},      {"diamond", 2.419f}};
     std::string n = name;
-    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(n.begin(), n.end(), n.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     for (auto& [key, value] : kIors)
         if (n == key) {
             ior = value;
@@ -268,7 +336,8 @@ void validateScene(const Scene& scene) {
         checkIndex(s.material, scene.materials.size(), "material of shape '" + s.name + "'");
     }
     for (const Material& m : scene.materials) {
-        checkIndex(m.reflectanceTexture, scene.textures.size(), "texture of material '" + m.name + "'");
+        checkIndex(m.reflectanceTexture, scene.textures.size(),
+                   "texture of material '" + m.name + "'");
         checkIndex(m.normalMap, scene.textures.size(), "normal map of material '" + m.name + "'");
         checkIndex(m.specularReflectanceTexture, scene.textures.size(),
                    "specular texture of material '" + m.name + "'");

@@ -5,16 +5,24 @@
 // Bad input throws loom::UserError naming the file, line (and element/attribute) and what was
 // expected. Unsupported features are skipped or approximated with one warning each (logged and
 // kept in Scene::warnings) saying what was done instead.
+#include <map>
 #include <string>
 
 #include "core/scene/Scene.h"
 
 namespace loom::scene {
 
-Scene loadScene(const std::string& path);
+struct SceneLoadOptions {
+    // Values for Mitsuba $variables, overriding <default> (like `mitsuba -Dname=value`). Some
+    // scenes need them, e.g. the SMS roughness sweep (sms-plane/plane_rough_*.xml: alpha).
+    std::map<std::string, std::string> defines;
+};
+
+Scene loadScene(const std::string& path, const SceneLoadOptions& options = {});
 
 Scene loadJsonScene(const std::string& path);
-Scene loadMitsubaScene(const std::string& path);
+Scene loadMitsubaScene(const std::string& path,
+                       const std::map<std::string, std::string>& defines = {});
 Scene loadGltfScene(const std::string& path);
 Scene loadObjScene(const std::string& path);
 
@@ -27,10 +35,11 @@ void addWarning(Scene& scene, const std::string& message);
 std::string resolvePath(const std::string& baseDir, const std::string& file);
 // Adds a bitmap texture (deduplicated by path, raw flag and uv scale) and returns its index.
 // raw = values as stored (normal maps, data); otherwise 8-bit/LDR colour files are decoded from
-// sRGB to linear. A missing or unreadable file gives a warning naming `context` and the path
-// tried, and returns -1 (the caller falls back to a constant).
+// sRGB to linear. A missing or unreadable file gives a warning naming `context`, the path
+// tried and `fallback` (what the caller does instead), and returns -1.
 int addBitmapTexture(Scene& scene, const std::string& path, bool raw, glm::vec2 uvScale,
-                     const std::string& context);
+                     const std::string& context,
+                     const std::string& fallback = "using a constant instead");
 // Mean linear RGB of a texture (checkerboards: mean of the two colours).
 glm::vec3 textureAverage(const Texture& texture);
 // Complex IOR of a named conductor ("Au", "Ag", "Cu", "Al", "Cr", ...; "none" = perfect

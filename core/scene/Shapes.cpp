@@ -190,9 +190,11 @@ Mesh makeGrass(const GrassParams& p) {
         float h = p.minHeight + (p.maxHeight - p.minHeight) * rng.next();
         float bend = p.bend * (0.5f + rng.next());
         glm::vec3 side(std::cos(facing), std::sin(facing), 0.0f);  // across the blade
-        glm::vec3 lean(-side.y, side.x, 0.0f);                       // bending direction
+        glm::vec3 lean(-side.y, side.x, 0.0f);                     // bending direction
         // Point on the blade's spine at relative height t (quadratic bend towards the tip).
-        auto spine = [&](float t) { return root + lean * (bend * h * t * t) + glm::vec3(0, 0, h * t); };
+        auto spine = [&](float t) {
+            return root + lean * (bend * h * t * t) + glm::vec3(0, 0, h * t);
+        };
         auto base = uint32_t(m.positions.size());
         float w = 0.5f * p.width;
         m.positions.push_back(spine(0.0f) - side * w);
@@ -235,7 +237,20 @@ glm::mat4 cylinderTransform(const glm::vec3& p0, const glm::vec3& p1, float radi
 // Height formulas
 
 struct HeightFormula::Node {
-    enum Kind { Number, VarX, VarY, VarR, Add, Sub, Mul, Div, Pow, Neg, Call1, Call2 } kind = Number;
+    enum Kind {
+        Number,
+        VarX,
+        VarY,
+        VarR,
+        Add,
+        Sub,
+        Mul,
+        Div,
+        Pow,
+        Neg,
+        Call1,
+        Call2
+    } kind = Number;
     float value = 0.0f;
     float (*fn1)(float) = nullptr;
     float (*fn2)(float, float) = nullptr;
@@ -243,18 +258,30 @@ struct HeightFormula::Node {
 
     float eval(float x, float y) const {
         switch (kind) {
-            case Number: return value;
-            case VarX: return x;
-            case VarY: return y;
-            case VarR: return std::sqrt(x * x + y * y);
-            case Add: return a->eval(x, y) + b->eval(x, y);
-            case Sub: return a->eval(x, y) - b->eval(x, y);
-            case Mul: return a->eval(x, y) * b->eval(x, y);
-            case Div: return a->eval(x, y) / b->eval(x, y);
-            case Pow: return std::pow(a->eval(x, y), b->eval(x, y));
-            case Neg: return -a->eval(x, y);
-            case Call1: return fn1(a->eval(x, y));
-            case Call2: return fn2(a->eval(x, y), b->eval(x, y));
+            case Number:
+                return value;
+            case VarX:
+                return x;
+            case VarY:
+                return y;
+            case VarR:
+                return std::sqrt(x * x + y * y);
+            case Add:
+                return a->eval(x, y) + b->eval(x, y);
+            case Sub:
+                return a->eval(x, y) - b->eval(x, y);
+            case Mul:
+                return a->eval(x, y) * b->eval(x, y);
+            case Div:
+                return a->eval(x, y) / b->eval(x, y);
+            case Pow:
+                return std::pow(a->eval(x, y), b->eval(x, y));
+            case Neg:
+                return -a->eval(x, y);
+            case Call1:
+                return fn1(a->eval(x, y));
+            case Call2:
+                return fn2(a->eval(x, y), b->eval(x, y));
         }
         return 0.0f;
     }
@@ -309,17 +336,23 @@ private:
     NodePtr expr() {
         NodePtr n = term();
         while (true) {
-            if (accept('+')) n = binary(HeightFormula::Node::Add, n, term());
-            else if (accept('-')) n = binary(HeightFormula::Node::Sub, n, term());
-            else return n;
+            if (accept('+'))
+                n = binary(HeightFormula::Node::Add, n, term());
+            else if (accept('-'))
+                n = binary(HeightFormula::Node::Sub, n, term());
+            else
+                return n;
         }
     }
     NodePtr term() {
         NodePtr n = unary();
         while (true) {
-            if (accept('*')) n = binary(HeightFormula::Node::Mul, n, unary());
-            else if (accept('/')) n = binary(HeightFormula::Node::Div, n, unary());
-            else return n;
+            if (accept('*'))
+                n = binary(HeightFormula::Node::Mul, n, unary());
+            else if (accept('/'))
+                n = binary(HeightFormula::Node::Div, n, unary());
+            else
+                return n;
         }
     }
     NodePtr unary() {
@@ -355,11 +388,16 @@ private:
                 ++mPos;
             std::string name = mText.substr(start, mPos - start);
             auto n = std::make_shared<HeightFormula::Node>();
-            if (name == "x") n->kind = HeightFormula::Node::VarX;
-            else if (name == "y") n->kind = HeightFormula::Node::VarY;
-            else if (name == "r") n->kind = HeightFormula::Node::VarR;
-            else if (name == "pi") n->value = kPi;
-            else return call(name, start);
+            if (name == "x")
+                n->kind = HeightFormula::Node::VarX;
+            else if (name == "y")
+                n->kind = HeightFormula::Node::VarY;
+            else if (name == "r")
+                n->kind = HeightFormula::Node::VarR;
+            else if (name == "pi")
+                n->value = kPi;
+            else
+                return call(name, start);
             return n;
         }
         fail(fmt::format("unexpected '{}'", c));
@@ -420,7 +458,9 @@ HeightFormula HeightFormula::parse(const std::string& text, const std::string& c
     return f;
 }
 
-float HeightFormula::operator()(float x, float y) const { return mRoot ? mRoot->eval(x, y) : 0.0f; }
+float HeightFormula::operator()(float x, float y) const {
+    return mRoot ? mRoot->eval(x, y) : 0.0f;
+}
 
 // ------------------------------------------------------------------------------------------
 // Mesh utilities
@@ -449,7 +489,8 @@ void flipNormals(Mesh& mesh) {
 void validateMesh(const Mesh& mesh, const std::string& context) {
     size_t n = mesh.positions.size();
     if (!mesh.normals.empty() && mesh.normals.size() != n)
-        throw UserError(fmt::format("{}: {} normals for {} vertices", context, mesh.normals.size(), n));
+        throw UserError(
+            fmt::format("{}: {} normals for {} vertices", context, mesh.normals.size(), n));
     if (!mesh.uvs.empty() && mesh.uvs.size() != n)
         throw UserError(fmt::format("{}: {} uvs for {} vertices", context, mesh.uvs.size(), n));
     for (size_t i = 0; i < n; ++i) {
@@ -474,11 +515,11 @@ enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64
 
 bool parsePlyType(const std::string& s, PlyType& t) {
     static const std::pair<const char*, PlyType> kTypes[] = {
-        {"char", PlyType::Int8},     {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
-        {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},     {"int16", PlyType::Int16},
-        {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
-        {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
-        {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+        {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+        {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+        {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+        {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+        {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
         {"float64", PlyType::Float64}};
     for (auto& [name, type] : kTypes)
         if (s == name) {
@@ -491,13 +532,17 @@ bool parsePlyType(const std::string& s, PlyType& t) {
 size_t plyTypeSize(PlyType t) {
     switch (t) {
         case PlyType::Int8:
-        case PlyType::UInt8: return 1;
+        case PlyType::UInt8:
+            return 1;
         case PlyType::Int16:
-        case PlyType::UInt16: return 2;
+        case PlyType::UInt16:
+            return 2;
         case PlyType::Int32:
         case PlyType::UInt32:
-        case PlyType::Float32: return 4;
-        case PlyType::Float64: return 8;
+        case PlyType::Float32:
+            return 4;
+        case PlyType::Float64:
+            return 8;
     }
     return 0;
 }
@@ -534,14 +579,22 @@ public:
         // The host is little endian (x86-64, ARM64); swap big-endian data.
         if (mFormat == PlyFormat::BinaryBig) std::reverse(bytes, bytes + size);
         switch (type) {
-            case PlyType::Int8: return double(int8_t(bytes[0]));
-            case PlyType::UInt8: return double(bytes[0]);
-            case PlyType::Int16: return double(load<int16_t>(bytes));
-            case PlyType::UInt16: return double(load<uint16_t>(bytes));
-            case PlyType::Int32: return double(load<int32_t>(bytes));
-            case PlyType::UInt32: return double(load<uint32_t>(bytes));
-            case PlyType::Float32: return double(load<float>(bytes));
-            case PlyType::Float64: return load<double>(bytes);
+            case PlyType::Int8:
+                return double(int8_t(bytes[0]));
+            case PlyType::UInt8:
+                return double(bytes[0]);
+            case PlyType::Int16:
+                return double(load<int16_t>(bytes));
+            case PlyType::UInt16:
+                return double(load<uint16_t>(bytes));
+            case PlyType::Int32:
+                return double(load<int32_t>(bytes));
+            case PlyType::UInt32:
+                return double(load<uint32_t>(bytes));
+            case PlyType::Float32:
+                return double(load<float>(bytes));
+            case PlyType::Float64:
+                return load<double>(bytes);
         }
         return 0.0;
     }
@@ -560,13 +613,15 @@ private:
     }
     double readAscii() {
         while (mPos < mData.size() && std::isspace(static_cast<unsigned char>(mData[mPos]))) ++mPos;
-        if (mPos >= mData.size()) throw UserError(mPath + ": PLY file is truncated (ASCII data ends early)");
+        if (mPos >= mData.size())
+            throw UserError(mPath + ": PLY file is truncated (ASCII data ends early)");
         const char* begin = mData.c_str() + mPos;
         char* end = nullptr;
         double v = std::strtod(begin, &end);
         if (end == begin) {
             size_t len = 0;
-            while (begin[len] && !std::isspace(static_cast<unsigned char>(begin[len])) && len < 20) ++len;
+            while (begin[len] && !std::isspace(static_cast<unsigned char>(begin[len])) && len < 20)
+                ++len;
             throw UserError(fmt::format("{}: PLY ASCII data: expected a number, got '{}'", mPath,
                                         std::string(begin, len)));
         }
@@ -605,16 +660,21 @@ Mesh readPly(const std::string& path) {
         std::string token;
         if (!(ss >> token) || token == "comment" || token == "obj_info") continue;
         auto bad = [&](const std::string& what) {
-            return UserError(fmt::format("{}: PLY header line {}: {} in '{}'", path, lineNo, what, line));
+            return UserError(
+                fmt::format("{}: PLY header line {}: {} in '{}'", path, lineNo, what, line));
         };
         if (token == "end_header") break;
         if (token == "format") {
             std::string f, version;
             ss >> f >> version;
-            if (f == "ascii") format = PlyFormat::Ascii;
-            else if (f == "binary_little_endian") format = PlyFormat::BinaryLittle;
-            else if (f == "binary_big_endian") format = PlyFormat::BinaryBig;
-            else throw bad("expected ascii, binary_little_endian or binary_big_endian");
+            if (f == "ascii")
+                format = PlyFormat::Ascii;
+            else if (f == "binary_little_endian")
+                format = PlyFormat::BinaryLittle;
+            else if (f == "binary_big_endian")
+                format = PlyFormat::BinaryBig;
+            else
+                throw bad("expected ascii, binary_little_endian or binary_big_endian");
             haveFormat = true;
         } else if (token == "element") {
             PlyElement e;
@@ -627,8 +687,8 @@ Mesh readPly(const std::string& path) {
             if (!(ss >> type)) throw bad("expected a property type");
             if (type == "list") {
                 std::string countType, itemType;
-                if (!(ss >> countType >> itemType >> p.name) || !parsePlyType(countType, p.countType) ||
-                    !parsePlyType(itemType, p.type))
+                if (!(ss >> countType >> itemType >> p.name) ||
+                    !parsePlyType(countType, p.countType) || !parsePlyType(itemType, p.type))
                     throw bad("expected 'property list <count type> <item type> <name>'");
                 p.isList = true;
             } else if (!parsePlyType(type, p.type) || !(ss >> p.name)) {
@@ -653,9 +713,9 @@ Mesh readPly(const std::string& path) {
             for (size_t i = 0; i < e.properties.size(); ++i) {
                 const std::string& n = e.properties[i].name;
                 static const std::pair<const char*, int> kNames[] = {
-                    {"x", 0},         {"y", 1},         {"z", 2},         {"nx", 3},
-                    {"ny", 4},        {"nz", 5},        {"u", 6},         {"v", 7},
-                    {"s", 6},         {"t", 7},         {"texture_u", 6}, {"texture_v", 7},
+                    {"x", 0},         {"y", 1},        {"z", 2},         {"nx", 3},
+                    {"ny", 4},        {"nz", 5},       {"u", 6},         {"v", 7},
+                    {"s", 6},         {"t", 7},        {"texture_u", 6}, {"texture_v", 7},
                     {"texture_s", 6}, {"texture_t", 7}};
                 for (auto& [name, s] : kNames)
                     if (n == name && !e.properties[i].isList) slot[i] = s;
@@ -704,7 +764,8 @@ Mesh readPly(const std::string& path) {
                         poly[k] = uint32_t(idx);
                     }
                     // Polygons become triangle fans (as Mitsuba does).
-                    for (size_t k = 2; k < count; ++k) mesh.indices.push_back({poly[0], poly[k - 1], poly[k]});
+                    for (size_t k = 2; k < count; ++k)
+                        mesh.indices.push_back({poly[0], poly[k - 1], poly[k]});
                 }
         } else {
             // Skip unknown elements (edges, materials, ...) value by value.

@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // Bump when the way sources are prepared changes, so old cache entries are ignored.
-constexpr const char* kFrontEndRevision = "loom-shader-1";
+constexpr const char* kFrontEndRevision = "loom-shader-2";
 
 bool readFile(const std::string& path, std::string& out) {
     std::ifstream in(path, std::ios::binary);
@@ -63,16 +63,38 @@ std::string prepareSource(const std::string& text, const std::string& path) {
     return out;
 }
 
+// glslang's automatic binding assignment only maps resources the shader uses; a declared but
+// unused one keeps binding 0 and collides with a used one (an invalid descriptor set layout
+// whose writes go nowhere). Resources are bound by name, so give every Binding decoration
+// its own number, in declaration order.
+void assignUniqueBindings(std::vector<uint32_t>& spirv) {
+    constexpr uint32_t kOpDecorate = 71, kDecorationBinding = 33;
+    uint32_t next = 0;
+    for (size_t i = 5; i < spirv.size();) {
+        uint32_t words = spirv[i] >> 16, opcode = spirv[i] & 0xffffu;
+        if (words == 0) break;  // malformed; reflection reports it
+        if (opcode == kOpDecorate && words >= 4 && i + 3 < spirv.size() &&
+            spirv[i + 2] == kDecorationBinding)
+            spirv[i + 3] = next++;
+        i += words;
+    }
+}
+
 // Finds #include "x" / <x> lines; conditionals are ignored (the key may over-include, which
-// only costs an extra file read).
-std::vector<std::string> scanIncludes(const std::string& text) {
-    static const std::regex re(R"(^\s*#\s*include\s*[<"]([^>"]+)[>"])");
-    std::vector<std::string> out;
+// only costs an extra file read). `system` marks <x>, which the includer resolves from the
+// search paths only (not next to the including file).
+struct IncludeLine {
+    std::string header;
+    bool system = false;
+};
+std::vector<IncludeLine> scanIncludes(const std::string& text) {
+    static const std::regex re(R"(^\s*#\s*include\s*([<"])([^>"]+)[>"])");
+    std::vector<IncludeLine> out;
     std::istringstream in(text);
     std::string line;
     while (std::getline(in, line)) {
         std::smatch m;
-        if (std::regex_search(line, m, re)) out.push_back(m[1]);
+        if (std::regex_search(line, m, re)) out.push_back({m[2], m[1] == "<"});
     }
     return out;
 }
@@ -200,10 +222,12 @@ std::string ShaderCompiler::cacheKey(const std::string& resolvedPath, const Shad
         }
         h.add(p).add(text);
         for (const auto& inc : scanIncludes(text)) {
+            // Resolve exactly as the Includer does, or the key tracks the wrong file.
             try {
-                queue.push_back(resolve(inc, fs::path(p).parent_path().string()));
+                queue.push_back(
+                    resolve(inc.header, inc.system ? "" : fs::path(p).parent_path().string()));
             } catch (const UserError&) {
-                h.add("<unresolved>" + inc);
+                h.add("<unresolved>" + inc.header);
             }
         }
     }
@@ -277,6 +301,7 @@ std::shared_ptr<const CompiledShader> ShaderCompiler::compile(const std::string&
         options.disableOptimizer = true;  // the driver optimises; keeps compile time low
         glslang::GlslangToSpv(*program.getIntermediate(EShLangCompute), result->spirv, &logger,
                               &options);
+        assignUniqueBindings(result->spirv);
         result->reflection = reflectSpirv(result->spirv);
         ++mStats.compiles;
         if (!cacheFile.empty()) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace loom {
 
@@ -225,9 +226,14 @@ public:
             switch (var.storageClass) {
                 case spv::StorageClassUniformConstant:
                 case spv::StorageClassUniform:
-                case spv::StorageClassStorageBuffer:
+                case spv::StorageClassStorageBuffer: {
+                    // From SPIR-V 1.4 the entry point lists every global it uses; resources
+                    // outside that list are dead (a library's buffers a kernel never reads:
+                    // glslang gives them binding 0) and need no descriptor.
+                    if (mVersion >= 0x00010400u && mEntryPoint && !mInterface.count(var.id)) break;
                     result.bindings.push_back(reflectBinding(var));
                     break;
+                }
                 case spv::StorageClassPushConstant:
                     // Only one push-constant block is allowed per entry point; keep the first.
                     if (!result.pushConstants) {
@@ -265,6 +271,7 @@ private:
             fail("bad magic number " + hex(input[0]) + " (expected " + hex(spv::MagicNumber) + ")");
         }
 
+        mVersion = (*words)[1];
         size_t pos = spv::HeaderWords;
         while (pos < words->size()) {
             const uint32_t first = (*words)[pos];
@@ -302,6 +309,11 @@ private:
                     (!mEntryIsCompute && inst.operand(0) == spv::ExecutionModelGLCompute)) {
                     mEntryPoint = inst.operand(1);
                     mEntryIsCompute = inst.operand(0) == spv::ExecutionModelGLCompute;
+                    // Interface ids follow the name literal (nul-terminated, word padded).
+                    size_t i = 2;
+                    while (i < inst.operandCount && (inst.operand(i) >> 24) != 0u) ++i;
+                    mInterface.clear();
+                    for (++i; i < inst.operandCount; ++i) mInterface.insert(inst.operand(i));
                 }
                 break;
             case spv::OpExecutionMode:
@@ -632,6 +644,8 @@ private:
     mutable std::unordered_map<uint32_t, uint32_t> mStructSizes;  // sizeOf cache
     std::optional<uint32_t> mEntryPoint;  // first GLCompute entry point, else the first one
     bool mEntryIsCompute = false;
+    uint32_t mVersion = 0;
+    std::unordered_set<uint32_t> mInterface;  // global ids the entry point uses (SPIR-V >= 1.4)
 };
 
 }  // namespace

@@ -184,18 +184,18 @@ public:
             if (!v.is_object()) throw ParamError(std::string("'") + what + "' must be an object");
             for (auto& [k, x] : v.items()) fn(k, x);
         };
+        // Port lists are built on copies and committed only once valid: a rejected value must
+        // leave the declared ports as they were (Pass::setParam restores the parameter).
+        std::vector<PortDef> inputs = mInputs, outputs = mOutputs, persistent = mPersistent;
         if (name == "inputs") {
-            std::vector<PortDef> defs;
-            parseMap("inputs", [&](auto& k, auto& x) { defs.push_back(parsePort(k, x, true, false)); });
-            mInputs = defs;
+            inputs.clear();
+            parseMap("inputs", [&](auto& k, auto& x) { inputs.push_back(parsePort(k, x, true, false)); });
         } else if (name == "outputs") {
-            std::vector<PortDef> defs;
-            parseMap("outputs", [&](auto& k, auto& x) { defs.push_back(parsePort(k, x, false, false)); });
-            mOutputs = defs;
+            outputs.clear();
+            parseMap("outputs", [&](auto& k, auto& x) { outputs.push_back(parsePort(k, x, false, false)); });
         } else if (name == "persistent") {
-            std::vector<PortDef> defs;
-            parseMap("persistent", [&](auto& k, auto& x) { defs.push_back(parsePort(k, x, false, true)); });
-            mPersistent = defs;
+            persistent.clear();
+            parseMap("persistent", [&](auto& k, auto& x) { persistent.push_back(parsePort(k, x, false, true)); });
         } else if (name == "constants") {
             std::vector<ConstantDef> defs;
             parseMap("constants", [&](auto& k, auto& x) {
@@ -219,10 +219,13 @@ public:
         }
         // Port names must be unique across inputs, outputs and persistent resources.
         std::set<std::string> seen;
-        for (auto* list : {&mInputs, &mOutputs, &mPersistent})
+        for (auto* list : {&inputs, &outputs, &persistent})
             for (auto& p : *list)
                 if (!seen.insert(p.port).second)
                     throw ParamError("port name '" + p.port + "' is declared twice");
+        mInputs = std::move(inputs);
+        mOutputs = std::move(outputs);
+        mPersistent = std::move(persistent);
     }
 
     void compile(ShaderLibrary& shaders) override {

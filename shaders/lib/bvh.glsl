@@ -36,8 +36,17 @@ const float BVH_ROBUST = 1.0000008;
 // the result matches rtcIntersect1 on shared edges as closely as float allows.
 bool bvh_intersect_triangle(uint index, vec3 o, vec3 d, float tmin, inout float tmax,
                             uint mask, inout Hit hit) {
+#ifdef EXP_TRI_SMALL
+    index &= 0x3fffu;
+#endif
 #ifdef EXP_TRI_NO_LOADS
-    vec4 r0 = vec4(index, 1, 2, 0), r1 = vec4(o, 0), r2 = vec4(d, index);
+    vec4 r0 = vec4(float(index) * 1e-6, 1, 2, uintBitsToFloat(index)), r1 = vec4(o * 0.01, uintBitsToFloat(0xffu)), r2 = vec4(d.yzx, index);
+#elif defined(EXP_TRI_LOADS_ONLY)
+    vec4 r0 = bvh_tris.data[3u * index];
+    vec4 r1 = bvh_tris.data[3u * index + 1u];
+    vec4 r2 = bvh_tris.data[3u * index + 2u];
+    hit.bary += r0.xy + r1.zw + r2.xw;
+    return false;
 #else
     vec4 r0 = bvh_tris.data[3u * index];
     vec4 r1 = bvh_tris.data[3u * index + 1u];

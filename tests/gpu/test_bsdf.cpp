@@ -32,6 +32,9 @@ using scene::BsdfType;
 using scene::Material;
 
 constexpr double kPi = 3.14159265358979323846;
+// Azimuth of every incident direction in the tests: lobes sit around the plane of incidence,
+// forward of it at phi = kWoPhi - pi.
+constexpr double kWoPhi = 0.3;
 
 // Flags and modes of bsdf.glsl.
 constexpr uint32_t kReflection = 1, kTransmission = 2, kDiffuse = 4, kGlossy = 8, kDelta = 16,
@@ -159,7 +162,7 @@ glm::vec3 sphericalDirection(double cosTheta, double phi) {
 
 // Incident direction at polar angle thetaDeg (> 90: below the surface), fixed azimuth.
 glm::vec3 woAt(double thetaDeg) {
-    return sphericalDirection(std::cos(thetaDeg * kPi / 180.0), 0.3);
+    return sphericalDirection(std::cos(thetaDeg * kPi / 180.0), kWoPhi);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -243,13 +246,17 @@ Chi2Result chi2(const std::vector<double>& observed, const std::vector<double>& 
     return r;
 }
 
-// (cos theta, phi) histogram grid and its quadrature: every cell is split into kSub x kSub
-// sub-rectangles, each integrated with the 2 x 2 Gauss-Legendre rule (an open rule, so the
-// horizon cos = 0, a cell edge where the pdf jumps, is never evaluated).
+// (cos theta, phi) histogram grid and the quadrature of the pdf over its cells. Each cell is
+// split into sub-rectangles integrated with the 2 x 2 Gauss-Legendre rule, uniform in theta
+// (smooth at the poles, where cos theta is a singular coordinate) and in phi. The rule is open,
+// so the horizon cos = 0, a cell edge where the pdf jumps, is never evaluated. Finer
+// subdivisions where lobes get sharp: rows at the horizon and the poles, and the forward
+// azimuths, where grazing lobes are only ~2 alpha cos(theta_o) wide in phi.
 struct SphereGrid {
-    static constexpr int kCos = 40, kPhi = 80, kSub = 6;
+    static constexpr int kCos = 40, kPhi = 80;
+    static constexpr int kSub = 6, kSubFine = 48;
     std::vector<glm::vec4> dirs;
-    std::vector<double> weights;  // d(cos) dphi of each node
+    std::vector<double> weights;  // solid angle of each node
     std::vector<int> cell;
     std::shared_ptr<gpu::Buffer> buffer;
 
@@ -260,19 +267,37 @@ struct SphereGrid {
         return c * kPhi + p;
     }
 
+    // Gauss-Legendre nodes (position, weight) of [a, b] split into `sub` intervals.
+    static void nodes(double a, double b, int sub, std::vector<std::pair<double, double>>& out) {
+        const double gl[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
+        const double h = (b - a) / sub;
+        for (int k = 0; k < 2 * sub; ++k) out.emplace_back(a + h * (k / 2 + gl[k % 2]), 0.5 * h);
+    }
+
     static SphereGrid& get() {
         static SphereGrid grid = [] {
             SphereGrid g;
-            const double gl[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
-            const int nc = kCos * kSub * 2, np = kPhi * kSub * 2;
-            const double dc = 2.0 / (kCos * kSub), dp = 2.0 * kPi / (kPhi * kSub);
-            for (int i = 0; i < nc; ++i) {
-                const double cosT = -1.0 + dc * (i / 2 + gl[i % 2]);
-                for (int j = 0; j < np; ++j) {
-                    const double phi = -kPi + dp * (j / 2 + gl[j % 2]);
-                    g.dirs.emplace_back(sphericalDirection(cosT, phi), 0.0f);
-                    g.weights.push_back(0.25 * dc * dp);
-                    g.cell.push_back((i / (2 * kSub)) * kPhi + j / (2 * kSub));
+            std::vector<std::pair<double, double>> thetas, phis;
+            std::vector<int> rows, cols;
+            for (int c = 0; c < kCos; ++c) {
+                const bool fine = c <= 1 || c >= kCos - 2 || c == kCos / 2 - 1 || c == kCos / 2;
+                nodes(std::acos(-1.0 + 2.0 * (c + 1) / kCos), std::acos(-1.0 + 2.0 * c / kCos),
+                      fine ? kSubFine : kSub, thetas);
+                rows.resize(thetas.size(), c);
+            }
+            const int forward = int((kWoPhi) / (2.0 * kPi) * kPhi);  // bin of phi = kWoPhi - pi
+            for (int p = 0; p < kPhi; ++p) {
+                const bool fine = std::abs(p - forward) <= 2;
+                nodes(-kPi + 2.0 * kPi * p / kPhi, -kPi + 2.0 * kPi * (p + 1) / kPhi,
+                      fine ? kSubFine : kSub, phis);
+                cols.resize(phis.size(), p);
+            }
+            for (size_t i = 0; i < thetas.size(); ++i) {
+                const auto [theta, wt] = thetas[i];
+                for (size_t j = 0; j < phis.size(); ++j) {
+                    g.dirs.emplace_back(sphericalDirection(std::cos(theta), phis[j].first), 0.0f);
+                    g.weights.push_back(wt * std::sin(theta) * phis[j].second);
+                    g.cell.push_back(rows[i] * kPhi + cols[j]);
                 }
             }
             g.buffer = Gpu::get().upload(g.dirs, "grid");
@@ -359,7 +384,7 @@ constexpr uint32_t kChi2Samples = 1u << 20;
 SamplingReport runSamplingCase(const Chi2Case& c) {
     const glm::vec3 wo = woAt(c.thetaDeg);
     auto T0 = std::chrono::steady_clock::now();
-    const SampleBatch batch = sampleBsdf(c.material, wo, kChi2Samples, kRadiance);
+    const SampleBatch batch = sampleBsdf(c.material, wo, kChi2Samples, kRadiance, std::getenv("CHI2_SEED") ? atoi(std::getenv("CHI2_SEED")) : 1);
     auto T1 = std::chrono::steady_clock::now();
     SphereGrid& grid = SphereGrid::get();
     auto T2 = std::chrono::steady_clock::now();

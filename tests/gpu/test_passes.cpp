@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,209 @@ TEST(PassesGpu, JsonComputePassBoxBlurMatchesCpu) {
     // The blur must actually blur: radius 3 differs from the input.
     EXPECT_GT(std::abs(r->readOutput("blur.output").at(6, 4, 0) - input.at(6, 4, 0)), 1e-3f);
     EXPECT_EQ(r->gpu().validationErrors(), 0u);
+}
+
+TEST(PassesGpu, ComputePassConstantsDefinesAndDispatch) {
+    auto graph = RenderGraph::parse(R"({
+      "passes": [{"name": "k", "type": "ComputePass", "params": {
+        "shader": "constants.comp",
+        "outputs": {"values": {"glsl": "Values", "kind": "buffer", "bytes": 256},
+                    "mask": {"glsl": "maskImage", "format": "r32f", "optional": true}},
+        "constants": {
+          "gain": {"type": "float", "default": 1.0},
+          "radius": {"type": "int", "default": 0},
+          "samples": {"type": "uint", "default": 1},
+          "flip": {"type": "bool", "default": false},
+          "offset": {"type": "vec2"},
+          "tint": {"type": "vec3"},
+          "afterTint": {"type": "float"},
+          "plane": {"type": "vec4"}},
+        "defines": {"SCALE_DEFINE": 2.5},
+        "dispatch": [3],
+        "gain": 2.75, "radius": -4, "samples": 9, "flip": true, "offset": [0.5, -1.5],
+        "tint": [0.125, 0.25, 0.375], "afterTint": 6.5, "plane": [1, -2, 3, -4]}}],
+      "outputs": ["k.values"]})",
+                                    kData + "/constants_graph.json");
+    auto r = makeRenderer(std::move(graph), 6, 5, 42);
+    auto read = [&] {
+        std::vector<float> v(64);
+        r->gpu().downloadBuffer(*r->graph().outputBuffer("k.values"), v.data(), 256);
+        return v;
+    };
+    r->frame();
+    r->frame();
+    std::vector<float> v = read();
+    const std::vector<float> expected{2.75f, -4, 9,  1, 0.5f, -1.5f, 0.125f, 0.25f, 0.375f, 6.5f, 1,
+                                      -2,    3,  -4, 6, 5,    1,     42,     2.5f,  0,      3};
+    for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(v[i], expected[i]) << "value " << i;
+    // dispatch [3] runs exactly three threads.
+    EXPECT_EQ(v[32], 1.0f);
+    EXPECT_EQ(v[34], 3.0f);
+    EXPECT_EQ(v[35], 0.0f);
+
+    // A constant changes without a recompile; marking the optional output sets HAS_MASK.
+    r->graph().setParam("k.gain", 0.25);
+    r->graph().markOutput("k.mask");
+    r->frame();
+    v = read();
+    EXPECT_EQ(v[0], 0.25f);
+    EXPECT_EQ(v[19], 1.0f);
+}
+
+TEST(PassesGpu, ComputePassPersistentHistoryResets) {
+    auto graph = RenderGraph::parse(R"({
+      "passes": [{"name": "k", "type": "ComputePass", "params": {
+        "shader": "frame_counter.comp",
+        "outputs": {"output": {"glsl": "outputImage"}},
+        "persistent": {"count": {"glsl": "countImage", "format": "r32f"}}}}],
+      "outputs": ["k.output"]})",
+                                    kData + "/counter_graph.json");
+    auto r = makeRenderer(std::move(graph), 5, 3);
+    auto expectCount = [&](float n, float reset, const char* what) {
+        ImageData out = r->readOutput("k.output");
+        for (uint32_t y = 0; y < r->height(); ++y)
+            for (uint32_t x = 0; x < r->width(); ++x) {
+                ASSERT_EQ(out.at(x, y, 0), n) << what << " at " << x << "," << y;
+                ASSERT_EQ(out.at(x, y, 1), reset) << what << " at " << x << "," << y;
+            }
+    };
+    r->frame();
+    expectCount(1, 1, "first frame");
+    r->frame();
+    r->frame();
+    expectCount(3, 0, "third frame");
+    r->resize(4, 6);
+    r->frame();
+    expectCount(1, 1, "after resize");
+    r->frame();
+    expectCount(2, 0, "second frame after resize");
+    r->graph().invalidate("test");
+    r->frame();
+    expectCount(1, 1, "after recompile");
+}
+
+TEST(PassesGpu, AliasedChainComputesTheSameValues) {
+    std::string text = R"({"passes": [)";
+    const char* names[] = {"A", "B", "C", "D"};
+    for (int i = 0; i < 4; ++i)
+        text += std::string(i ? "," : "") + R"({"name": ")" + names[i] +
+                R"(", "type": "ComputePass", "params": {"shader": "add.comp",
+          "inputs": {"input": {"glsl": "inputImage", "format": "rgba32f", "optional": true}},
+          "outputs": {"output": {"glsl": "outputImage"}},
+          "constants": {"step": {"type": "float"}}, "step": )" +
+                std::to_string(1 << i) + "}}";
+    text += R"(], "edges": [["A.output", "B.input"], ["B.output", "C.input"],
+                            ["C.output", "D.input"]],
+               "outputs": ["D.output"]})";
+    auto r = makeRenderer(RenderGraph::parse(text, kData + "/chain_graph.json"), 9, 7);
+    r->frame();
+    const auto& cg = *r->graph().compiled();
+    ASSERT_EQ(cg.physicalCount, 3);
+    ASSERT_EQ(cg.resources[cg.portResource.at("A.output")].physical,
+              cg.resources[cg.portResource.at("C.output")].physical);
+    auto expectChain = [&](const std::string& port, float sum) {
+        ImageData out = r->readOutput(port);
+        ImageData cpu = ImageData::make(9, 7, 4);
+        for (uint32_t y = 0; y < 7; ++y)
+            for (uint32_t x = 0; x < 9; ++x) {
+                cpu.at(x, y, 0) = float(x) + sum;
+                cpu.at(x, y, 1) = float(y) + sum;
+                cpu.at(x, y, 2) = cpu.at(x, y, 3) = sum;
+            }
+        expectNear(out, cpu, 0.0, port);
+    };
+    expectChain("D.output", 15);
+    r->frame();  // the aliased memory is rewritten in the right order every frame
+    expectChain("D.output", 15);
+    r->graph().markOutput("B.output");
+    r->frame();
+    expectChain("B.output", 3);
+    expectChain("D.output", 15);
+}
+
+// frame() must fail with a message naming the pass and `expected`.
+void expectFrameError(const std::string& params, const std::string& expected) {
+    auto graph = RenderGraph::parse(R"({"passes": [{"name": "k", "type": "ComputePass",
+        "params": {"shader": "add.comp", )" +
+                                        params + R"(}}], "outputs": ["k.output"]})",
+                                    kData + "/error_graph.json");
+    auto r = makeRenderer(std::move(graph), 4, 4);
+    try {
+        r->frame();
+        ADD_FAILURE() << "no error for " << params;
+    } catch (const loom::UserError& e) {
+        std::string msg = e.what();
+        EXPECT_EQ(msg.rfind("pass 'k' (ComputePass): ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(expected), std::string::npos) << msg;
+    }
+}
+
+TEST(PassesGpu, ComputePassInterfaceErrorsNameThePort) {
+    const std::string input =
+        R"("inputs": {"input": {"glsl": "inputImage", "format": "rgba32f", "optional": true}}, )";
+    expectFrameError(input + R"("outputs": {"output": {"glsl": "resultImage"}})",
+                     "port 'output': the shader declares no resource 'resultImage'; it "
+                     "declares: inputImage, outputImage");
+    expectFrameError(input + R"("outputs": {"output": {"glsl": "outputImage", "format": "r32f"}})",
+                     "port 'output' is r32f but the shader declares 'outputImage' as rgba32f");
+    expectFrameError(input + R"("outputs": {"output": {"glsl": "outputImage"}},
+        "constants": {"strength": {"type": "float"}})",
+                     "constant 'strength' is not a member of the shader's push_constant block");
+    expectFrameError(input + R"("outputs": {"output": {"glsl": "outputImage"}},
+        "constants": {"step": {"type": "int"}})",
+                     "constant 'step' is declared int but the shader's push constant is float");
+    expectFrameError(R"("shader": "missing_kernel.comp", "outputs": {"output": {}})",
+                     "shader file 'missing_kernel.comp' not found");
+}
+
+TEST(PassesGpu, ShaderHotReloadThroughTheGraph) {
+    TempDir tmp("loom-reload");
+    auto kernel = [](const std::string& value) {
+        return "#version 460\n"
+               "layout(local_size_x = 8, local_size_y = 8) in;\n"
+               "layout(rgba32f) uniform writeonly image2D outputImage;\n"
+               "layout(push_constant) uniform Params { uvec2 frameSize; } pc;\n"
+               "void main() {\n"
+               "    ivec2 p = ivec2(gl_GlobalInvocationID.xy);\n"
+               "    imageStore(outputImage, p, vec4(" +
+               value + "));\n}\n";
+    };
+    loom::test::writeFile(tmp / "fill.comp", kernel("1.0"));
+    loom::test::writeFile(tmp / "graph.json", R"({"passes": [{"name": "k", "type": "ComputePass",
+      "params": {"shader": "fill.comp", "outputs": {"output": {"glsl": "outputImage"}}}}],
+      "outputs": ["k.output"]})");
+    auto r = makeRenderer(RenderGraph::load(tmp / "graph.json"), 4, 4);
+    r->frame();
+    EXPECT_EQ(r->readOutput("k.output").at(3, 3, 0), 1.0f);
+    EXPECT_EQ(r->graph().reloadShaders(r->shaders()), 0u);
+
+    loom::test::writeFile(tmp / "fill.comp", kernel("2.0"));
+    EXPECT_EQ(r->graph().reloadShaders(r->shaders()), 1u);
+    r->frame();
+    EXPECT_EQ(r->readOutput("k.output").at(3, 3, 0), 2.0f);
+
+    // A broken edit reports file:line and the line; the last good image stays readable.
+    loom::test::writeFile(tmp / "fill.comp", kernel("undefined_value"));
+    EXPECT_EQ(r->graph().reloadShaders(r->shaders()), 1u);
+    try {
+        r->frame();
+        ADD_FAILURE() << "broken shader compiled";
+    } catch (const loom::UserError& e) {
+        std::string msg = e.what();
+        EXPECT_EQ(msg.rfind("pass 'k' (ComputePass): ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(std::filesystem::weakly_canonical(tmp / "fill.comp").string() + ":7:"),
+                  std::string::npos)
+            << msg;
+        EXPECT_NE(msg.find("imageStore(outputImage, p, vec4(undefined_value));"), std::string::npos)
+            << msg;
+    }
+    EXPECT_EQ(r->readOutput("k.output").at(0, 0, 0), 2.0f);
+
+    // Fixing the file is enough: the next frame compiles it.
+    loom::test::writeFile(tmp / "fill.comp", kernel("3.0"));
+    r->graph().reloadShaders(r->shaders());
+    r->frame();
+    EXPECT_EQ(r->readOutput("k.output").at(3, 3, 0), 3.0f);
 }
 
 // ---------------------------------------------------------------------------------------------

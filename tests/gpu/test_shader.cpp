@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,21 @@ TEST_F(ShaderTest, IncludeFromSearchPaths) {
     file("first/kernels/k.comp", storeKernel("#include \"common.glsl\""));
     ShaderCompiler c2({dir / "first"}, "");
     EXPECT_EQ(c2.compile("kernels/k.comp")->path, canonical(dir / "first/kernels/k.comp"));
+}
+
+TEST_F(ShaderTest, SystemIncludeComesFromSearchPathsOnly) {
+    // <value.glsl> is the search path's file even when one with the same name sits next to the
+    // including file; the cache key must track that same file.
+    std::string used = file("lib/value.glsl", "float VALUE() { return 2.0; }\n");
+    file("src/value.glsl", "float VALUE() { return -1.0; }\n");
+    std::string main = file("src/main.comp", storeKernel("#include <value.glsl>"));
+    ShaderCompiler c({dir / "lib"}, cacheDir());
+    auto s = c.compile(main);
+    EXPECT_EQ(run(*s), 2.0f);
+    EXPECT_EQ(s->sources, (std::vector<std::string>{canonical(main), canonical(used)}));
+    writeFile(used, "float VALUE() { return 3.0; }\n");
+    EXPECT_EQ(c.reloadChanged(), 1u) << "an edit of the included file went unnoticed";
+    EXPECT_EQ(run(*c.compile(main)), 3.0f);
 }
 
 TEST_F(ShaderTest, IncludeRelativeToIncludingFile) {
@@ -208,6 +224,42 @@ TEST_F(ShaderTest, ReloadChangedPicksUpEdits) {
     EXPECT_EQ(run(*c.compile(main)), 21.0f);
     EXPECT_EQ(c.reloadChanged(), 0u);
     EXPECT_EQ(c.generation(), 2u);
+}
+
+TEST_F(ShaderTest, UnusedResourcesGetTheirOwnBinding) {
+    // glslang leaves an unused resource at binding 0, where it collides with a used one.
+    std::string main = file("main.comp",
+                            "#version 460\n"
+                            "layout(local_size_x = 1) in;\n"
+                            "layout(std430) buffer Out { float result[]; };\n"
+                            "layout(r32f) uniform writeonly image2D unusedImage;\n"
+                            "layout(std430) buffer Unused { float unused[]; };\n"
+                            "void main() { result[0] = 4.5; }\n");
+    ShaderCompiler c({}, "");
+    auto s = c.compile(main);
+    // Dead resources may be left out of the reflection; those reflected must not collide.
+    ASSERT_FALSE(s->reflection.bindings.empty());
+    std::set<uint32_t> numbers;
+    for (const auto& b : s->reflection.bindings) numbers.insert(b.binding);
+    EXPECT_EQ(numbers.size(), s->reflection.bindings.size())
+        << "two resources share a binding number";
+
+    // Bound by name, the used buffer receives the value.
+    auto gpu = loom::test::gpuContext();
+    auto pipeline = gpu->createPipeline(s->spirv, s->reflection, s->path);
+    auto out = gpu->createBuffer(16, "out"), unused = gpu->createBuffer(16, "unused");
+    auto image = gpu->createImage(2, 2, loom::gpu::Format::R32F, "unusedImage");
+    loom::gpu::Bindings b;
+    b.set("Out", out).set("Unused", unused).set("unusedImage", image);
+    auto cmd = gpu->beginCommands();
+    cmd->fillBuffer(*out, 0);
+    cmd->barrier();
+    cmd->dispatch(*pipeline, b, nullptr, 1);
+    gpu->submit(*cmd);
+    float v = 0.0f;
+    gpu->downloadBuffer(*out, &v, sizeof(v));
+    EXPECT_EQ(v, 4.5f);
+    EXPECT_EQ(gpu->validationErrors(), 0u);
 }
 
 // Returns the ShaderCompileError message of compiling `path`.

@@ -421,6 +421,31 @@ TEST(GraphValidation, ComputePassDeclarationErrors) {
                   {"pass 'k' (ComputePass)", "parameter 'radius' = -3 is out of range"});
 }
 
+TEST(GraphValidation, RejectedComputePassEditKeepsItsPorts) {
+    const std::string text = R"({
+  "passes": [)" + relay("k") +
+                             R"(],
+  "outputs": ["k.out"]
+})";
+    auto g = RenderGraph::parse(text, kFile);
+    loom::json before = g->getParam("k.outputs");
+    try {
+        // An output named like the existing input is rejected...
+        g->setParam("k.outputs", {{"in", {{"format", "rgba32f"}}}});
+        FAIL() << "duplicate port accepted";
+    } catch (const loom::UserError& e) {
+        EXPECT_NE(std::string(e.what()).find("port name 'in' is declared twice"), std::string::npos)
+            << e.what();
+    }
+    // ...and leaves the pass exactly as it was: same parameter, same ports, still compiles.
+    EXPECT_EQ(g->getParam("k.outputs"), before);
+    auto refl = g->findPass("k")->reflection();
+    ASSERT_EQ(refl.ports().size(), 2u);
+    EXPECT_EQ(refl.ports()[1].name, "out");
+    auto cg = g->compile(4, 4);
+    EXPECT_EQ(cg.portResource.count("k.out"), 1u);
+}
+
 TEST(GraphValidation, EdgeMixingPortAndPass) {
     const std::string text = R"({
   "passes": [{"name": "a", "type": "ImageLoader"}, {"name": "tm", "type": "ToneMap"}],

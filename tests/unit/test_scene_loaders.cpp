@@ -24,7 +24,9 @@ namespace {
 namespace fs = std::filesystem;
 using namespace loom::scene;
 
-fs::path sharedScenes() { return fs::path(LOOM_SOURCE_DIR) / ".." / "shared" / "scenes"; }
+fs::path sharedScenes() {
+    return fs::path(LOOM_SOURCE_DIR) / ".." / "shared" / "scenes";
+}
 
 // A fresh directory under the system temp dir, removed at the end of the test.
 class TempDir {
@@ -50,7 +52,9 @@ private:
     fs::path mPath;
 };
 
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 bool finite(const glm::mat4& m) {
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r)
@@ -85,7 +89,8 @@ void expectSane(const Scene& s, const std::string& what) {
         EXPECT_FALSE(m.indices.empty()) << m.name;
         for (const glm::vec3& p : m.positions) ASSERT_TRUE(finite(p)) << m.name;
         for (const glm::uvec3& t : m.indices)
-            ASSERT_TRUE(t.x < m.positions.size() && t.y < m.positions.size() && t.z < m.positions.size())
+            ASSERT_TRUE(t.x < m.positions.size() && t.y < m.positions.size() &&
+                        t.z < m.positions.size())
                 << m.name;
         if (!m.normals.empty()) {
             EXPECT_EQ(m.normals.size(), m.positions.size()) << m.name;
@@ -121,16 +126,23 @@ void expectNear(const glm::vec3& a, const glm::vec3& b, float eps = 1e-4f) {
     EXPECT_NEAR(a.z, b.z, eps);
 }
 
-glm::vec3 apply(const glm::mat4& m, const glm::vec3& p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+glm::vec3 apply(const glm::mat4& m, const glm::vec3& p) {
+    return glm::vec3(m * glm::vec4(p, 1.0f));
+}
 
 // ------------------------------------------------------------------------------------------
 // (a) every shared Mitsuba scene
 
 TEST(SceneLoaders, AllSharedMitsubaScenesLoad) {
     if (!fs::is_directory(sharedScenes())) GTEST_SKIP() << "no shared scenes at " << sharedScenes();
-    // PROVENANCE.md: sms-slab is incomplete (meshes/plane_1.obj could not be obtained), so its
-    // scenes must fail with an error naming the missing mesh (until the file is added).
-    const std::map<std::string, std::string> kIncomplete = {{"sms-slab", "plane_1.obj"}};
+    // PROVENANCE.md: sms-slab is incomplete (meshes/plane_1.obj could not be obtained) and the
+    // unedited originals of two Bitterli scenes reference OBJs that were replaced by PLYs. These
+    // must fail with an error naming the missing mesh (until the files are added).
+    const std::map<std::string, std::string> kIncomplete = {
+        {"sms-slab/slab_pt.xml", "plane_1.obj"},
+        {"sms-slab/slab_sms.xml", "plane_1.obj"},
+        {"veach-ajar/scene_original_obj-teapots.xml", "models/Mesh00"},
+        {"water-caustic/scene_original_obj.xml", "models/Mesh001.obj"}};
     std::vector<fs::path> files;
     for (const auto& dir : fs::directory_iterator(sharedScenes()))
         if (dir.is_directory())
@@ -138,16 +150,21 @@ TEST(SceneLoaders, AllSharedMitsubaScenesLoad) {
                 if (f.path().extension() == ".xml") files.push_back(f.path());
     std::sort(files.begin(), files.end());
     ASSERT_FALSE(files.empty());
+    // The SMS roughness sweep (sms-plane/plane_rough_*.xml) takes alpha on the command line
+    // (mitsuba -Dalpha=...); defines override <default> and are ignored where unused.
+    SceneLoadOptions options;
+    options.defines["alpha"] = "0.05";
     for (const fs::path& file : files) {
         std::string rel = file.parent_path().filename().string() + "/" + file.filename().string();
         SCOPED_TRACE(rel);
         try {
-            Scene s = loadScene(file.string());
+            Scene s = loadScene(file.string(), options);
             expectSane(s, rel);
-            std::printf("[scene] %-55s shapes %4zu  triangles %8zu  lights %zu  warnings %zu\n", rel.c_str(),
-                        s.shapes.size(), triangleCount(s), s.lights.size(), s.warnings.size());
+            std::printf("[scene] %-55s shapes %4zu  triangles %8zu  lights %zu  warnings %zu\n",
+                        rel.c_str(), s.shapes.size(), triangleCount(s), s.lights.size(),
+                        s.warnings.size());
         } catch (const loom::UserError& e) {
-            auto it = kIncomplete.find(file.parent_path().filename().string());
+            auto it = kIncomplete.find(rel);
             ASSERT_TRUE(it != kIncomplete.end()) << e.what();
             EXPECT_NE(std::string(e.what()).find(it->second), std::string::npos) << e.what();
             EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos) << e.what();
@@ -197,7 +214,8 @@ TEST(SceneLoaders, VeachAjarCamera) {
     EXPECT_EQ(floor.type, BsdfType::RoughConductor);
     ASSERT_GE(floor.specularReflectanceTexture, 0);
     EXPECT_EQ(s.textures[size_t(floor.specularReflectanceTexture)].kind, TextureKind::Checkerboard);
-    expectNear(glm::vec3(s.textures[size_t(floor.specularReflectanceTexture)].uvScale, 0), glm::vec3(20, 80, 0));
+    expectNear(glm::vec3(s.textures[size_t(floor.specularReflectanceTexture)].uvScale, 0),
+               glm::vec3(20, 80, 0));
     // Teapots share two PLY meshes.
     EXPECT_EQ(shapeNamed(s, "Pot2_0001")->mesh, shapeNamed(s, "Pot3_0002")->mesh);
 }
@@ -214,8 +232,8 @@ TEST(SceneLoaders, WaterCausticMitsuba05Names) {
         const Material& m = s.materials[size_t(shape.material)];
         if (m.type != BsdfType::Dielectric) continue;
         ++water;
-        EXPECT_NEAR(m.eta, 1.8f, 1e-5f);                // intIOR 1.8 / extIOR 1
-        EXPECT_FLOAT_EQ(shape.toWorld[1][1], 1.5f);     // toWorld matrix
+        EXPECT_NEAR(m.eta, 1.8f, 1e-5f);             // intIOR 1.8 / extIOR 1
+        EXPECT_FLOAT_EQ(shape.toWorld[1][1], 1.5f);  // toWorld matrix
         if (shape.name == "Mesh000") {
             EXPECT_TRUE(s.meshes[size_t(shape.mesh)].faceNormals);  // faceNormals
         }
@@ -241,7 +259,8 @@ TEST(SceneLoaders, SmsCausticTags) {
             const Material& m = s.materials[size_t(shape.material)];
             EXPECT_EQ(m.type, BsdfType::Conductor);
             EXPECT_TRUE(m.twoSided);
-            expectNear(m.conductorEta, glm::vec3(0.1431189557f, 0.3749570432f, 1.4424785571f));  // Au
+            expectNear(m.conductorEta,
+                       glm::vec3(0.1431189557f, 0.3749570432f, 1.4424785571f));  // Au
         }
 
     fs::path sphere = sharedScenes() / "sms-sphere" / "sphere_sms_constfloor.xml";
@@ -284,14 +303,16 @@ TEST(SceneLoaders, AllProjectJsonScenesLoad) {
         EXPECT_TRUE(s.warnings.empty()) << name << ": " << s.warnings.front();
         EXPECT_GE(s.camera.path.size(), 2u) << name;
         EXPECT_LE(triangleCount(s), 20000u) << name;  // project scenes stay small
-        std::printf("[scene] %-28s shapes %3zu  triangles %6zu  lights %zu  keyframes %zu\n", name.c_str(),
-                    s.shapes.size(), triangleCount(s), s.lights.size(), s.camera.path.size());
+        std::printf("[scene] %-28s shapes %3zu  triangles %6zu  lights %zu  keyframes %zu\n",
+                    name.c_str(), s.shapes.size(), triangleCount(s), s.lights.size(),
+                    s.camera.path.size());
     }
     EXPECT_GE(count, 6);
 }
 
 TEST(SceneLoaders, JsonSceneContents) {
-    Scene s = loadScene((fs::path(LOOM_SOURCE_DIR) / "scenes" / "refractive_caustic.json").string());
+    Scene s =
+        loadScene((fs::path(LOOM_SOURCE_DIR) / "scenes" / "refractive_caustic.json").string());
     uint32_t all = 0;
     for (const Shape& shape : s.shapes) all |= shape.flags;
     EXPECT_TRUE(all & kCausticCasterRefract);
@@ -306,7 +327,8 @@ TEST(SceneLoaders, JsonSceneContents) {
     EXPECT_FLOAT_EQ(lo, 0.05f);
     EXPECT_FLOAT_EQ(hi, 0.6f);
     Scene f = loadScene((fs::path(LOOM_SOURCE_DIR) / "scenes" / "fine_geometry.json").string());
-    EXPECT_TRUE(std::any_of(f.shapes.begin(), f.shapes.end(), [](const Shape& x) { return x.moving; }));
+    EXPECT_TRUE(
+        std::any_of(f.shapes.begin(), f.shapes.end(), [](const Shape& x) { return x.moving; }));
 }
 
 // ------------------------------------------------------------------------------------------
@@ -314,7 +336,8 @@ TEST(SceneLoaders, JsonSceneContents) {
 
 TEST(SceneLoaders, ErrorMalformedXml) {
     TempDir tmp;
-    std::string path = tmp.write("bad.xml", "<scene version=\"3.0.0\">\n  <shape type=\"obj\">\n</scene>\n");
+    std::string path =
+        tmp.write("bad.xml", "<scene version=\"3.0.0\">\n  <shape type=\"obj\">\n</scene>\n");
     std::string e = loadError(path);
     EXPECT_NE(e.find("bad.xml:3:"), std::string::npos) << e;
     EXPECT_NE(e.find("XML syntax error"), std::string::npos) << e;
@@ -348,7 +371,9 @@ TEST(SceneLoaders, ErrorMissingMeshFile) {
     EXPECT_NE(e.find("not found"), std::string::npos) << e;
     EXPECT_NE(e.find((tmp.path() / "meshes" / "nothere.obj").string()), std::string::npos) << e;
 
-    std::string json = tmp.write("mesh.json", "{\n  \"shapes\": [\n    {\"type\": \"mesh\", \"file\": \"gone.ply\"}\n  ]\n}\n");
+    std::string json =
+        tmp.write("mesh.json",
+                  "{\n  \"shapes\": [\n    {\"type\": \"mesh\", \"file\": \"gone.ply\"}\n  ]\n}\n");
     e = loadError(json);
     EXPECT_NE(e.find("mesh.json:3:"), std::string::npos) << e;
     EXPECT_NE(e.find((tmp.path() / "gone.ply").string()), std::string::npos) << e;
@@ -356,7 +381,8 @@ TEST(SceneLoaders, ErrorMissingMeshFile) {
 
 TEST(SceneLoaders, ErrorMalformedJson) {
     TempDir tmp;
-    std::string path = tmp.write("bad.json", "{\n  \"shapes\": [\n    {\"type\": \"cube\",, }\n  ]\n}\n");
+    std::string path =
+        tmp.write("bad.json", "{\n  \"shapes\": [\n    {\"type\": \"cube\",, }\n  ]\n}\n");
     std::string e = loadError(path);
     EXPECT_NE(e.find("bad.json:3:"), std::string::npos) << e;
     EXPECT_NE(e.find("syntax error"), std::string::npos) << e;
@@ -385,6 +411,19 @@ TEST(SceneLoaders, ErrorUnknownJsonKey) {
 
 TEST(SceneLoaders, ErrorOtherCases) {
     TempDir tmp;
+    fs::path rough = sharedScenes() / "sms-plane" / "plane_rough_pt.xml";
+    if (fs::exists(rough)) {
+        std::string e = loadError(rough.string());
+        EXPECT_NE(e.find("plane_rough_pt.xml:60"), std::string::npos) << e;
+        EXPECT_NE(e.find("$alpha"), std::string::npos) << e;
+        SceneLoadOptions options;
+        options.defines["alpha"] = "0.2";
+        Scene s = loadScene(rough.string(), options);
+        bool found = false;
+        for (const Material& m : s.materials)
+            found |= m.type == BsdfType::RoughConductor && m.alpha == 0.2f;
+        EXPECT_TRUE(found);
+    }
     // Undefined $variable names the variable and the line.
     std::string e = loadError(tmp.write("var.xml",
                                         "<scene version=\"3.0.0\">\n"
@@ -402,29 +441,34 @@ TEST(SceneLoaders, ErrorOtherCases) {
     EXPECT_NE(e.find("num.xml:3"), std::string::npos) << e;
     EXPECT_NE(e.find("wide"), std::string::npos) << e;
     // Unknown JSON material reference and a bad height formula.
-    e = loadError(tmp.write("mat.json", "{\"shapes\": [{\"type\": \"cube\", \"material\": \"gold\"}]}"));
+    e = loadError(
+        tmp.write("mat.json", "{\"shapes\": [{\"type\": \"cube\", \"material\": \"gold\"}]}"));
     EXPECT_NE(e.find("unknown material 'gold'"), std::string::npos) << e;
-    e = loadError(tmp.write("hf.json", "{\"shapes\": [{\"type\": \"heightfield\", \"height\": \"sin(x\"}]}"));
+    e = loadError(
+        tmp.write("hf.json", "{\"shapes\": [{\"type\": \"heightfield\", \"height\": \"sin(x\"}]}"));
     EXPECT_NE(e.find("formula"), std::string::npos) << e;
-    EXPECT_NE(loadError((tmp.path() / "nothing.json").string()).find("not found"), std::string::npos);
-    EXPECT_NE(loadError(tmp.write("scene.fbx", "")).find("unknown scene format"), std::string::npos);
+    EXPECT_NE(loadError((tmp.path() / "nothing.json").string()).find("not found"),
+              std::string::npos);
+    EXPECT_NE(loadError(tmp.write("scene.fbx", "")).find("unknown scene format"),
+              std::string::npos);
 }
 
 TEST(SceneLoaders, UnsupportedFeaturesWarnOnce) {
     TempDir tmp;
-    std::string path = tmp.write("warn.xml",
-                                 "<scene version=\"3.0.0\">\n"
-                                 "  <integrator type=\"path\"/>\n"
-                                 "  <shape type=\"rectangle\">\n"
-                                 "    <bsdf type=\"roughconductor\">\n"
-                                 "      <float name=\"alpha_u\" value=\"0.1\"/>\n"
-                                 "      <float name=\"alpha_v\" value=\"0.3\"/>\n"
-                                 "      <float name=\"sparkle\" value=\"1\"/>\n"
-                                 "    </bsdf>\n"
-                                 "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n"
-                                 "  </shape>\n"
-                                 "  <shape type=\"hair\"/>\n"
-                                 "</scene>\n");
+    std::string path =
+        tmp.write("warn.xml",
+                  "<scene version=\"3.0.0\">\n"
+                  "  <integrator type=\"path\"/>\n"
+                  "  <shape type=\"rectangle\">\n"
+                  "    <bsdf type=\"roughconductor\">\n"
+                  "      <float name=\"alpha_u\" value=\"0.1\"/>\n"
+                  "      <float name=\"alpha_v\" value=\"0.3\"/>\n"
+                  "      <float name=\"sparkle\" value=\"1\"/>\n"
+                  "    </bsdf>\n"
+                  "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n"
+                  "  </shape>\n"
+                  "  <shape type=\"hair\"/>\n"
+                  "</scene>\n");
     Scene s = loadScene(path);
     ASSERT_EQ(s.warnings.size(), 4u);  // anisotropy, sparkle, hair, no sensor
     EXPECT_NE(s.warnings[0].find("warn.xml:4"), std::string::npos) << s.warnings[0];
@@ -440,29 +484,30 @@ TEST(SceneLoaders, UnsupportedFeaturesWarnOnce) {
 
 TEST(SceneLoaders, MitsubaTransformsCompose) {
     TempDir tmp;
-    std::string path = tmp.write("xf.xml",
-                                 "<scene version=\"3.0.0\">\n"
-                                 "  <sensor type=\"perspective\">\n"
-                                 "    <float name=\"fov\" value=\"30\"/>\n"
-                                 "    <transform name=\"to_world\">\n"
-                                 "      <lookat origin=\"0, 0, 0\" target=\"1, 0, 0\" up=\"0, 1, 0\"/>\n"
-                                 "      <translate x=\"-3\"/>\n"
-                                 "    </transform>\n"
-                                 "  </sensor>\n"
-                                 "  <shape type=\"rectangle\">\n"
-                                 "    <transform name=\"to_world\">\n"
-                                 "      <scale x=\"2\" y=\"3\"/>\n"
-                                 "      <rotate y=\"1\" angle=\"90\"/>\n"
-                                 "      <translate x=\"1\" y=\"2\" z=\"3\"/>\n"
-                                 "    </transform>\n"
-                                 "    <emitter type=\"area\"><spectrum name=\"radiance\" value=\"5\"/></emitter>\n"
-                                 "  </shape>\n"
-                                 "  <shape type=\"sphere\">\n"
-                                 "    <point name=\"center\" value=\"1, 1, 1\"/>\n"
-                                 "    <float name=\"radius\" value=\"0.5\"/>\n"
-                                 "    <transform name=\"to_world\"><rotate value=\"0, 0, 1\" angle=\"90\"/></transform>\n"
-                                 "  </shape>\n"
-                                 "</scene>\n");
+    std::string path = tmp.write(
+        "xf.xml",
+        "<scene version=\"3.0.0\">\n"
+        "  <sensor type=\"perspective\">\n"
+        "    <float name=\"fov\" value=\"30\"/>\n"
+        "    <transform name=\"to_world\">\n"
+        "      <lookat origin=\"0, 0, 0\" target=\"1, 0, 0\" up=\"0, 1, 0\"/>\n"
+        "      <translate x=\"-3\"/>\n"
+        "    </transform>\n"
+        "  </sensor>\n"
+        "  <shape type=\"rectangle\">\n"
+        "    <transform name=\"to_world\">\n"
+        "      <scale x=\"2\" y=\"3\"/>\n"
+        "      <rotate y=\"1\" angle=\"90\"/>\n"
+        "      <translate x=\"1\" y=\"2\" z=\"3\"/>\n"
+        "    </transform>\n"
+        "    <emitter type=\"area\"><spectrum name=\"radiance\" value=\"5\"/></emitter>\n"
+        "  </shape>\n"
+        "  <shape type=\"sphere\">\n"
+        "    <point name=\"center\" value=\"1, 1, 1\"/>\n"
+        "    <float name=\"radius\" value=\"0.5\"/>\n"
+        "    <transform name=\"to_world\"><rotate value=\"0, 0, 1\" angle=\"90\"/></transform>\n"
+        "  </shape>\n"
+        "</scene>\n");
     Scene s = loadScene(path);
     // Ops apply in document order: T * R * S. (1,0,0) -> S (2,0,0) -> Ry(90) (0,0,-2) -> T.
     expectNear(apply(s.shapes[0].toWorld, {1, 0, 0}), {1, 2, 1});
@@ -479,26 +524,27 @@ TEST(SceneLoaders, MitsubaTransformsCompose) {
 TEST(SceneLoaders, MitsubaDefaultsAndRefs) {
     TempDir tmp;
     tmp.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
-    std::string path = tmp.write("refs.xml",
-                                 "<scene version=\"0.5.0\">\n"
-                                 "  <default name=\"ior\" value=\"1.33\"/>\n"
-                                 "  <texture type=\"checkerboard\" id=\"check\">\n"
-                                 "    <rgb name=\"color0\" value=\"1, 0, 0\"/>\n"
-                                 "  </texture>\n"
-                                 "  <bsdf type=\"diffuse\" id=\"base\">\n"
-                                 "    <ref name=\"reflectance\" id=\"check\"/>\n"
-                                 "  </bsdf>\n"
-                                 "  <bsdf type=\"twosided\" id=\"both\"><ref id=\"base\"/></bsdf>\n"
-                                 "  <bsdf type=\"dielectric\" id=\"glass\"><float name=\"intIOR\" value=\"$ior\"/></bsdf>\n"
-                                 "  <shape type=\"obj\">\n"
-                                 "    <string name=\"filename\" value=\"tri.obj\"/>\n"
-                                 "    <boolean name=\"flipNormals\" value=\"true\"/>\n"
-                                 "    <ref id=\"both\"/>\n"
-                                 "  </shape>\n"
-                                 "  <shape type=\"cube\"><ref id=\"glass\"/>\n"
-                                 "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n"
-                                 "  <emitter type=\"point\"><point name=\"position\" x=\"1\" y=\"2\" z=\"3\"/></emitter>\n"
-                                 "</scene>\n");
+    std::string path = tmp.write(
+        "refs.xml",
+        "<scene version=\"0.5.0\">\n"
+        "  <default name=\"ior\" value=\"1.33\"/>\n"
+        "  <texture type=\"checkerboard\" id=\"check\">\n"
+        "    <rgb name=\"color0\" value=\"1, 0, 0\"/>\n"
+        "  </texture>\n"
+        "  <bsdf type=\"diffuse\" id=\"base\">\n"
+        "    <ref name=\"reflectance\" id=\"check\"/>\n"
+        "  </bsdf>\n"
+        "  <bsdf type=\"twosided\" id=\"both\"><ref id=\"base\"/></bsdf>\n"
+        "  <bsdf type=\"dielectric\" id=\"glass\"><float name=\"intIOR\" value=\"$ior\"/></bsdf>\n"
+        "  <shape type=\"obj\">\n"
+        "    <string name=\"filename\" value=\"tri.obj\"/>\n"
+        "    <boolean name=\"flipNormals\" value=\"true\"/>\n"
+        "    <ref id=\"both\"/>\n"
+        "  </shape>\n"
+        "  <shape type=\"cube\"><ref id=\"glass\"/>\n"
+        "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n"
+        "  <emitter type=\"point\"><point name=\"position\" x=\"1\" y=\"2\" z=\"3\"/></emitter>\n"
+        "</scene>\n");
     Scene s = loadScene(path);
     const Material& m0 = s.materials[size_t(s.shapes[0].material)];
     EXPECT_TRUE(m0.twoSided);
@@ -519,15 +565,19 @@ TEST(SceneLoaders, MitsubaDefaultsAndRefs) {
 
 std::string plyHeader(const std::string& format) {
     return "ply\nformat " + format +
-           " 1.0\ncomment test\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+           " 1.0\ncomment test\nelement vertex 5\nproperty float x\nproperty float y\nproperty "
+           "float z\n"
            "property uchar red\nproperty float nx\nproperty float ny\nproperty float nz\n"
-           "property float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\n"
+           "property float u\nproperty float v\nelement face 2\nproperty list uchar int "
+           "vertex_indices\n"
            "element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n";
 }
 
 TEST(SceneLoaders, PlyAsciiAndBinaryAgree) {
-    const float v[5][8] = {{0, 0, 0, 0, 0, 1, 0, 0},          {1, 0, 0, 0, 0, 1, 1, 0},
-                           {1, 1, 0, 0, 0, 1, 1, 1},          {0, 1, 0, 0, 0, 1, 0, 1},
+    const float v[5][8] = {{0, 0, 0, 0, 0, 1, 0, 0},
+                           {1, 0, 0, 0, 0, 1, 1, 0},
+                           {1, 1, 0, 0, 0, 1, 1, 1},
+                           {0, 1, 0, 0, 0, 1, 0, 1},
                            {0.5f, 2.25f, -1.5f, 0.6f, 0, 0.8f, 0.5f, 0.75f}};
     const std::vector<std::vector<int>> faces = {{0, 1, 2, 3}, {3, 2, 4}};
     TempDir tmp;
@@ -535,7 +585,8 @@ TEST(SceneLoaders, PlyAsciiAndBinaryAgree) {
     std::string ascii = plyHeader("ascii");
     for (auto& r : v) {
         char line[256];
-        std::snprintf(line, sizeof line, "%g %g %g 255 %g %g %g %g %g\n", r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7]);
+        std::snprintf(line, sizeof line, "%g %g %g 255 %g %g %g %g %g\n", r[0], r[1], r[2], r[3],
+                      r[4], r[5], r[6], r[7]);
         ascii += line;
     }
     for (auto& f : faces) {
@@ -603,12 +654,15 @@ TEST(SceneLoaders, PlyAsciiAndBinaryAgree) {
 TEST(SceneLoaders, BuiltinShapesAreOutwardAndConsistent) {
     // Vertex normals agree with the triangle winding (geometric normal), so one-sided lights
     // and normal-based tests see the same side as Mitsuba.
-    std::vector<Mesh> meshes = {makeRectangle(), makeCube(), makeSphere(8, 16), makeDisk(12), makeCylinder(12),
-                                makeHeightfield(4, 4, [](float x, float y) { return 0.1f * x * y; })};
+    std::vector<Mesh> meshes = {
+        makeRectangle(),   makeCube(),
+        makeSphere(8, 16), makeDisk(12),
+        makeCylinder(12),  makeHeightfield(4, 4, [](float x, float y) { return 0.1f * x * y; })};
     for (const Mesh& m : meshes) {
         validateMesh(m, m.name);
         for (const glm::uvec3& t : m.indices) {
-            glm::vec3 g = glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]);
+            glm::vec3 g = glm::cross(m.positions[t.y] - m.positions[t.x],
+                                     m.positions[t.z] - m.positions[t.x]);
             ASSERT_GT(glm::length(g), 0.0f) << m.name;
             for (int k = 0; k < 3; ++k) EXPECT_GT(glm::dot(g, m.normals[t[k]]), 0.0f) << m.name;
         }
@@ -628,7 +682,8 @@ TEST(SceneLoaders, BuiltinShapesAreOutwardAndConsistent) {
 
 TEST(SceneLoaders, CameraPathInterpolates) {
     Camera c;
-    c.path = {{0.0f, {0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 30.0f}, {10.0f, {10, 0, 0}, {10, 0, 1}, {0, 1, 0}, 50.0f}};
+    c.path = {{0.0f, {0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 30.0f},
+              {10.0f, {10, 0, 0}, {10, 0, 1}, {0, 1, 0}, 50.0f}};
     Camera mid = cameraAt(c, 5.0f);
     expectNear(glm::vec3(mid.toWorld[3]), {5, 0, 0});
     EXPECT_FLOAT_EQ(mid.fov, 40.0f);

@@ -455,3 +455,25 @@ TEST(SpirvReflect, MutatedModulesNeverCrash) {
 }
 
 }  // namespace
+
+// A shared library declares buffers a kernel may never read; glslang gives such dead
+// resources binding 0, so they must not reach the descriptor layout (duplicate bindings).
+TEST(SpirvReflect, DeadResourcesAreNotReflected) {
+    const char* src = R"(#version 460
+layout(local_size_x = 1) in;
+layout(std430) readonly buffer Unused { float unused_data[]; };
+layout(std430) readonly buffer Used { float used_data[]; };
+layout(r32f) uniform image2D dst;
+layout(r32f) uniform image2D deadImage;
+void main() { imageStore(dst, ivec2(0), vec4(used_data[0])); }
+)";
+    const auto words = compileCompute(src);
+    ASSERT_FALSE(words.empty());
+    const loom::ShaderReflection r = reflectSpirv(words);
+    EXPECT_NE(r.find("Used"), nullptr);
+    EXPECT_NE(r.find("dst"), nullptr);
+    EXPECT_EQ(r.find("Unused"), nullptr);
+    EXPECT_EQ(r.find("deadImage"), nullptr);
+    std::set<uint32_t> seen;
+    for (const auto& b : r.bindings) EXPECT_TRUE(seen.insert(b.binding).second) << b.name;
+}
