@@ -599,7 +599,8 @@ public:
             } else {
                 fail(node, "missing property 'filename' (SMS normalmap) or texture 'normalmap'");
             }
-            m.normalMapUseSlopes = p.getBool("use_slopes", true);
+            // Mitsuba 3's normalmap interpolates the normals themselves.
+            m.normalMapUseSlopes = p.has("filename") && p.getBool("use_slopes", true);
             if (tex >= 0) {
                 m.normalMap = tex;
                 m.name += "+normalmap";

@@ -227,10 +227,9 @@ public:
                 case spv::StorageClassUniformConstant:
                 case spv::StorageClassUniform:
                 case spv::StorageClassStorageBuffer: {
-                    // From SPIR-V 1.4 the entry point lists every global it uses; resources
-                    // outside that list are dead (a library's buffers a kernel never reads:
-                    // glslang gives them binding 0) and need no descriptor.
-                    if (mVersion >= 0x00010400u && mEntryPoint && !mInterface.count(var.id)) break;
+                    // Resources no function touches are dead (a library's buffers a kernel
+                    // never reads; glslang gives them binding 0) and need no descriptor.
+                    if (mHasFunctions && !mUsedPointers.count(var.id)) break;
                     result.bindings.push_back(reflectBinding(var));
                     break;
                 }
@@ -271,7 +270,6 @@ private:
             fail("bad magic number " + hex(input[0]) + " (expected " + hex(spv::MagicNumber) + ")");
         }
 
-        mVersion = (*words)[1];
         size_t pos = spv::HeaderWords;
         while (pos < words->size()) {
             const uint32_t first = (*words)[pos];
@@ -295,8 +293,36 @@ private:
         }
     }
 
+    // Records the pointer operands through which function bodies use global variables.
+    void notePointerUse(const Instruction& inst) {
+        const uint32_t op = inst.opcode;
+        auto use = [&](size_t i) {
+            if (i < inst.operandCount) mUsedPointers.insert(inst.operand(i));
+        };
+        if (op == 54) mHasFunctions = true;  // OpFunction
+        switch (op) {
+            case 60: case 61: case 65: case 66: case 67: case 68:  // texel ptr, load, chains, length
+                use(2);
+                break;
+            case 62: case 228:  // OpStore, OpAtomicStore
+                use(0);
+                break;
+            case 63:  // OpCopyMemory
+                use(0);
+                use(1);
+                break;
+            case 57:  // OpFunctionCall: arguments
+                for (size_t i = 3; i < inst.operandCount; ++i) use(i);
+                break;
+            default:
+                if (op >= 227 && op <= 242) use(2);  // atomics
+                break;
+        }
+    }
+
     void handle(const Instruction& inst) {
         const uint32_t op = inst.opcode;
+        notePointerUse(inst);
         switch (op) {
             case spv::OpName:
                 mNames[inst.operand(0)] = inst.string(1);
@@ -309,11 +335,6 @@ private:
                     (!mEntryIsCompute && inst.operand(0) == spv::ExecutionModelGLCompute)) {
                     mEntryPoint = inst.operand(1);
                     mEntryIsCompute = inst.operand(0) == spv::ExecutionModelGLCompute;
-                    // Interface ids follow the name literal (nul-terminated, word padded).
-                    size_t i = 2;
-                    while (i < inst.operandCount && (inst.operand(i) >> 24) != 0u) ++i;
-                    mInterface.clear();
-                    for (++i; i < inst.operandCount; ++i) mInterface.insert(inst.operand(i));
                 }
                 break;
             case spv::OpExecutionMode:
@@ -644,8 +665,8 @@ private:
     mutable std::unordered_map<uint32_t, uint32_t> mStructSizes;  // sizeOf cache
     std::optional<uint32_t> mEntryPoint;  // first GLCompute entry point, else the first one
     bool mEntryIsCompute = false;
-    uint32_t mVersion = 0;
-    std::unordered_set<uint32_t> mInterface;  // global ids the entry point uses (SPIR-V >= 1.4)
+    bool mHasFunctions = false;
+    std::unordered_set<uint32_t> mUsedPointers;  // ids used as pointers inside functions
 };
 
 }  // namespace

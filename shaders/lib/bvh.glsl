@@ -89,7 +89,11 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     // Inner child slots are visited in order slot ^ oct_inv descending: slot == octant first.
     uint oct_inv = 7u - (uint(neg.x) | uint(neg.y) << 1 | uint(neg.z) << 2);
 
+#ifdef EXP_REGSTACK
+    uvec2 r0 = uvec2(0), r1 = r0, r2 = r0, r3 = r0, r4 = r0, r5 = r0, r6 = r0, r7 = r0, r8 = r0, r9 = r0;
+#else
     uvec2 stack[BVH_STACK_SIZE];
+#endif
     uint sp = 0u;
     // Node group: x = first child node, y = inner-child hit bits (24..31) | imask (0..7).
     uvec2 ngroup = uvec2(0u, 0x80000000u);
@@ -105,7 +109,11 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         uint slot = (bit - 24u) ^ oct_inv;
         uint node = ngroup.x + uint(bitCount(ngroup.y & ((1u << slot) - 1u) & 0xffu));
         ngroup.y &= ~(1u << bit);
+#ifdef EXP_REGSTACK
+        if (ngroup.y > 0x00ffffffu) { r9 = r8; r8 = r7; r7 = r6; r6 = r5; r5 = r4; r4 = r3; r3 = r2; r2 = r1; r1 = r0; r0 = ngroup; sp++; }
+#else
         if (ngroup.y > 0x00ffffffu) stack[sp++] = ngroup;
+#endif
 
         uvec4 n0 = bvh_nodes.data[5u * node];
         uvec4 n1 = bvh_nodes.data[5u * node + 1u];
@@ -167,7 +175,11 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         ngroup = uvec2(n1.x & 0x00ffffffu, (hits & 0xff000000u) | (n0.w >> 24u));
         if (ngroup.y <= 0x00ffffffu) {
             if (sp == 0u) break;
+#ifdef EXP_REGSTACK
+            ngroup = r0; r0 = r1; r1 = r2; r2 = r3; r3 = r4; r4 = r5; r5 = r6; r6 = r7; r7 = r8; r8 = r9; --sp;
+#else
             ngroup = stack[--sp];
+#endif
         }
     }
 #ifdef EXP_STATS
