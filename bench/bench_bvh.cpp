@@ -1,7 +1,7 @@
 // GLSL BVH traversal (shaders/lib/bvh.glsl on the default device, lavapipe) against Embree
 // rtcIntersect1/rtcOccluded1 on the same CPU and the same rays: coherent primary rays from a
 // pinhole camera and incoherent diffuse bounces. Prints Mrays/s and the ratio.
-//   bench_bvh [--width W] [--height H] [--reps N] [--detail N] [--embree 0|1]
+//   bench_bvh [--width W] [--height H] [--reps N] [--detail N] [--spheres N] [--embree 0|1]
 //             [--define NAME=VALUE]...   (shader variants of lib/bvh.glsl)
 #include <embree3/rtcore.h>
 
@@ -57,7 +57,7 @@ void addSphere(SceneMesh& m, glm::vec3 c, float r, uint32_t rings, uint32_t segm
 
 // Rolling terrain with a field of spheres on it: large open areas plus dense clusters, the
 // mix of primary-ray depth complexity a real scene has. ~detail^2 * 2 + spheres triangles.
-SceneMesh makeScene(uint32_t detail) {
+SceneMesh makeScene(uint32_t detail, uint32_t spheres) {
     SceneMesh m;
     const uint32_t n = detail;
     auto height = [](float x, float z) {
@@ -79,7 +79,7 @@ SceneMesh makeScene(uint32_t detail) {
     }
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    for (int k = 0; k < 80; ++k) {
+    for (uint32_t k = 0; k < spheres; ++k) {
         const float x = -16.0f + 32.0f * u(rng), z = -16.0f + 32.0f * u(rng);
         const float r = 0.3f + 1.2f * u(rng);
         addSphere(m, {x, height(x, z) + 0.7f * r, z}, r, 48, 64);
@@ -251,7 +251,7 @@ struct GpuTracer {
 }  // namespace
 
 int main(int argc, char** argv) {
-    uint32_t width = 1024, height = 768, detail = 300;
+    uint32_t width = 1024, height = 768, detail = 300, spheres = 80;
     int reps = 3;
     bool embreeRuns = true;
     ShaderDefines defines;
@@ -262,6 +262,7 @@ int main(int argc, char** argv) {
         else if (a == "--height") height = v;
         else if (a == "--reps") reps = int(v);
         else if (a == "--detail") detail = v;
+        else if (a == "--spheres") spheres = v;
         else if (a == "--embree") embreeRuns = v != 0;
         else if (a == "--define") {  // NAME=VALUE, a shader variant to compare
             const std::string d = argv[i + 1];
@@ -273,7 +274,7 @@ int main(int argc, char** argv) {
         }
     }
 
-    const SceneMesh mesh = makeScene(detail);
+    const SceneMesh mesh = makeScene(detail, spheres);
     const scene::BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, {});
     std::printf("scene: %zu triangles; BVH8: %u nodes (%.1f MB), %u leaves, %u triangle refs "
                 "(%.1f MB), depth %u, built in %.0f ms\n",

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "core/graph/Renderer.h"
+#include "core/script/Csv.h"
+#include "core/script/LuaBindings.h"
 #include "core/util/Log.h"
 
 using namespace loom;
@@ -29,6 +31,8 @@ commands:
   validate GRAPH   check graph files without rendering
   passes           list every pass type with ports and parameters
   devices          list Vulkan devices
+  run SCRIPT.lua   run a Lua script (captures, sweeps, equal-time comparisons, plots)
+  merge OUT PARTS  merge the CSV files of sharded 'loom run --shard' runs
 
 'loom <command> --help' describes each command.
 )";
@@ -65,6 +69,28 @@ Lists every registered pass type with its ports and parameters (type, default, r
 const char* kDevicesHelp = R"(usage: loom devices
 
 Lists the Vulkan devices; pick one with --device INDEX|NAME or LOOM_DEVICE.
+)";
+
+const char* kRunHelp = R"(usage: loom run [--quiet] SCRIPT.lua [--shard I/N] [ARGS...]
+
+Runs a Lua script with the 'loom' module: renderers, parameters, graph editing, cameras,
+images, metrics, CSV/JSON, plots, progress bars and sweeps (see scripts/README.md).
+Everything after SCRIPT goes to the script: loom.args holds it, and NAME=VALUE or
+--NAME VALUE pairs are read with loom.arg("NAME", default).
+
+  --shard I/N   (anywhere) run only the values I, I+N, I+2N, ... (0 <= I < N) of every
+                loom.sweep; join the shards' CSV files with 'loom merge'
+  --quiet       (before SCRIPT) print only errors
+
+A Lua error prints script:line, the message and a traceback, and exits 2.
+Example: loom run scripts/equal_time.lua width=64 height=64 budget_ms=400
+)";
+
+const char* kMergeHelp = R"(usage: loom merge OUT.csv PART.csv [PART.csv ...]
+
+Concatenates CSV files that have the same header (the shards of a 'loom run --shard' sweep)
+into OUT.csv. Rows are sorted by the 'index' column when there is one, so merged shards
+equal the unsharded run. Empty files (shards that owned no values) are skipped.
 )";
 
 bool isHelp(const std::string& a) { return a == "--help" || a == "-h"; }
@@ -135,11 +161,13 @@ int cmdRender(const std::vector<std::string>& args) {
     Renderer r(o);
     for (auto& [k, v] : sets) r.graph().setParam(k, parseValue(v));
     logInfo("device: {}", r.gpu().deviceInfo().name);
-    std::map<std::string, double> passMs;
+    std::map<std::string, double> passMs, statSums;
     auto start = std::chrono::steady_clock::now();
     for (uint32_t f = 0; f < frames; ++f) {
         r.frame();
         for (auto& t : r.graph().timings()) passMs[t.pass] += t.gpuMs;
+        for (auto& p : r.graph().passes())
+            for (auto& [k, v] : p->stats()) statSums[p->name() + "." + k] += v;
     }
     double wallMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -166,9 +194,69 @@ int cmdRender(const std::vector<std::string>& args) {
         }
         std::printf("%-24s %10.3f\n%-24s %10.3f\n", "total (GPU)", total, "frame (wall)",
                     wallMs / frames);
+        // Throughput of passes that count their rays.
+        for (auto& p : r.graph().passes()) {
+            auto it = statSums.find(p->name() + ".rays");
+            if (it == statSums.end() || passMs[p->name()] <= 0) continue;
+            std::printf("%-24s %10.2f Mrays/s (%.0f rays/frame)\n", (p->name() + " rays").c_str(),
+                        it->second / (passMs[p->name()] * 1e3), it->second / frames);
+        }
     }
     for (auto& p : r.graph().passes())
         for (auto& [k, v] : p->stats()) logInfo("{}.{} = {}", p->name(), k, v);
+    return 0;
+}
+
+int cmdRun(const std::vector<std::string>& args) {
+    script::LuaRuntime::Options o;
+    std::string file;
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        if (a == "--shard" || a.rfind("--shard=", 0) == 0) {
+            std::string v = a == "--shard" ? "" : a.substr(8);
+            if (v.empty()) {
+                if (i + 1 >= args.size()) throw UsageError("--shard needs a value I/N");
+                v = args[++i];
+            }
+            script::parseShard(v, o.shardIndex, o.shardCount);
+        } else if (!file.empty()) {
+            o.args.push_back(a);
+        } else if (isHelp(a)) {
+            std::cout << kRunHelp;
+            return 0;
+        } else if (a == "--quiet") {
+            setLogLevel(LogLevel::Error);
+        } else if (a.rfind("--", 0) == 0) {
+            throw UsageError("run: unknown option '" + a + "' (see loom run --help)");
+        } else {
+            file = a;
+        }
+    }
+    if (file.empty()) throw UsageError("run: missing SCRIPT (see loom run --help)");
+    if (!std::filesystem::exists(file)) throw UsageError("run: script not found: '" + file + "'");
+    script::LuaRuntime lua(o);
+    return lua.runFile(file);
+}
+
+int cmdMerge(const std::vector<std::string>& args) {
+    std::vector<std::string> files;
+    for (auto& a : args) {
+        if (isHelp(a)) {
+            std::cout << kMergeHelp;
+            return 0;
+        }
+        if (a.rfind("--", 0) == 0) throw UsageError("merge: unknown option '" + a + "'");
+        files.push_back(a);
+    }
+    if (files.size() < 2) throw UsageError("merge: expected OUT.csv PART.csv... (see loom merge --help)");
+    std::vector<std::string> parts(files.begin() + 1, files.end());
+    for (auto& p : parts)
+        if (std::filesystem::absolute(p) == std::filesystem::absolute(files[0]))
+            throw UsageError("merge: the output '" + files[0] + "' is also an input");
+    script::CsvTable merged = script::mergeCsv(parts);
+    script::writeCsv(files[0], merged);
+    std::printf("wrote %s (%zu rows from %zu files)\n", files[0].c_str(), merged.rows.size(),
+                parts.size());
     return 0;
 }
 
@@ -301,7 +389,10 @@ int main(int argc, char** argv) {
         if (cmd == "validate") return cmdValidate(args);
         if (cmd == "passes") return cmdPasses(args);
         if (cmd == "devices") return cmdDevices(args);
-        throw UsageError("unknown command '" + cmd + "' (commands: render, validate, passes, devices)");
+        if (cmd == "run") return cmdRun(args);
+        if (cmd == "merge") return cmdMerge(args);
+        throw UsageError("unknown command '" + cmd +
+                         "' (commands: render, validate, passes, devices, run, merge)");
     } catch (const UserError& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 2;

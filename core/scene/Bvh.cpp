@@ -7,6 +7,8 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <unordered_map>
 
@@ -253,7 +255,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
     args.minLeafSize = 1;
     args.maxLeafSize = options.maxLeafSize;
     args.traversalCost = 1.0f;
-    args.intersectionCost = 1.0f;
+    args.intersectionCost = std::getenv("BVH_ICOST") ? float(std::atof(std::getenv("BVH_ICOST"))) : 1.0f;
     args.bvh = bvh;
     args.primitives = prims.data();
     args.primitiveCount = primCount;
@@ -312,15 +314,11 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
         for (int s = 0; s < 8; ++s)
             if (slotChild[s] >= 0 && !src.children[slotChild[s]]->leaf) ++innerCount;
         node.childBase = uint32_t(out.nodes.size());
-        if (node.childBase >= (1u << 24))
-            throw UserError("buildBvh: more than 2^24 BVH nodes (scene too large)");
-        node.childBase |= src.mask << 24;
         node.triangleBase = uint32_t(out.triangles.size());
         uint32_t nextInner = uint32_t(out.nodes.size());
         out.nodes.resize(out.nodes.size() + innerCount);
-        uint32_t triOffset = 0;
         for (int s = 0; s < 8; ++s) {
-            if (slotChild[s] < 0) continue;
+            if (slotChild[s] < 0) continue;  // empty slot: zero box, zero mask (never hit)
             const BuildNode* child = src.children[slotChild[s]];
             const RTCBounds& b = src.bounds[slotChild[s]];
             const float clo[3] = {b.lower_x, b.lower_y, b.lower_z};
@@ -338,20 +336,26 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
             }
             if (child->leaf) {
                 const auto* leaf = static_cast<const BuildLeaf*>(child);
-                node.meta[s] = uint8_t((((1u << leaf->count) - 1u) << 5) | triOffset);
+                uint32_t mask = 0;
                 for (uint32_t i = 0; i < leaf->count; ++i) {
                     const uint32_t p = leaf->prims[i];
                     const glm::uvec3 t = triangles[p];
                     const glm::vec3 v0 = positions[t.x];
-                    out.triangles.push_back(BvhTriangle{v0, p, positions[t.y] - v0, masks[p],
-                                                        positions[t.z] - v0, 0u});
+                    const glm::dvec3 e1 = glm::dvec3(positions[t.y]) - glm::dvec3(v0);
+                    const glm::dvec3 e2 = glm::dvec3(positions[t.z]) - glm::dvec3(v0);
+                    out.triangles.push_back(BvhTriangle{v0, p, glm::vec3(e1), masks[p],
+                                                        glm::vec3(e2), 0u,
+                                                        glm::vec3(glm::cross(e1, e2)), 0u});
+                    node.leafMask |= 1u << (3 * s + i);
+                    mask |= masks[p];
                 }
-                triOffset += leaf->count;
+                node.childMask[s] = uint8_t(mask);
                 ++out.stats.leaves;
             } else {
+                const auto* inner = static_cast<const BuildInner*>(child);
                 node.imask |= uint8_t(1u << s);
-                node.meta[s] = uint8_t((1u << 5) | (24u + uint32_t(s)));
-                work.push_back({static_cast<const BuildInner*>(child), nextInner++});
+                node.childMask[s] = uint8_t(inner->mask);
+                work.push_back({inner, nextInner++});
             }
         }
         out.nodes[w.index] = node;
@@ -383,12 +387,26 @@ void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build) {
                      "bvh_tris");
     adjacency = make(build.adjacency.data(), build.adjacency.size() * sizeof(glm::ivec4),
                      "bvh_adjacency");
+    {  // EXP_IMAGES prototype
+        auto img = [&](const void* data, size_t bytes, const char* name) {
+            const size_t texels = std::max<size_t>(bytes / 16, 1);
+            const uint32_t h = uint32_t((texels + 8191) / 8192);
+            auto image = gpu.createImage(8192, h, gpu::Format::RGBA32UI, name);
+            std::vector<uint8_t> padded(size_t(8192) * h * 16, 0);
+            std::memcpy(padded.data(), data, bytes);
+            gpu.uploadImage(*image, padded.data());
+            return image;
+        };
+        nodeTex = img(build.nodes.data(), build.nodes.size() * sizeof(BvhNode), "bvh_node_tex");
+        triTex = img(build.triangles.data(), build.triangles.size() * sizeof(BvhTriangle), "bvh_tri_tex");
+    }
     nodeCount = uint32_t(build.nodes.size());
     triangleCount = uint32_t(build.triangles.size());
 }
 
 void BvhGpu::bind(gpu::Bindings& bindings) const {
     bindings.set("bvh_nodes", nodes).set("bvh_tris", triangles).set("bvh_adjacency", adjacency);
+    bindings.set("bvh_node_tex", nodeTex).set("bvh_tri_tex", triTex);
 }
 
 }  // namespace loom::scene

@@ -1,10 +1,10 @@
 #pragma once
 // Triangle BVH for the GLSL traversal in shaders/lib/bvh.glsl. Embree's rtcBuildBVH (SAH,
-// high quality = spatial splits) builds an 8-wide tree which is stored in the compressed
-// wide BVH layout of Ylitie, Karras and Laine 2017, "Efficient Incoherent Ray Traversal on
-// GPUs Through Compressed Wide BVHs": 80-byte nodes with 8-bit quantised child boxes and
-// child slots ordered by ray octant. On lavapipe every divergent load is a per-lane loop,
-// so bytes fetched per ray is what limits speed; this layout fetches the fewest.
+// high quality = spatial splits) builds an 8-wide tree stored in a variant of the compressed
+// wide BVH of Ylitie, Karras and Laine 2017, "Efficient Incoherent Ray Traversal on GPUs
+// Through Compressed Wide BVHs": 8-bit quantised child boxes, child slots ordered by ray
+// octant. On lavapipe a divergent load is a per-lane loop costing about as much as a
+// hundred ALU operations, so the layout minimises load instructions per ray.
 #include <glm/glm.hpp>
 
 #include <cstdint>
@@ -14,42 +14,53 @@
 namespace loom::gpu {
 class Bindings;
 class Buffer;
+class Image;
 class Context;
 }  // namespace loom::gpu
 
 namespace loom::scene {
 
-// One node = 5 uvec4 (GLSL bvh_nodes.data[5 * i + k]):
-//  [0] origin.xyz (float bits), w = exponent x | y << 8 | z << 16 | imask << 24
-//  [1] x = first internal child node (low 24 bits) | union of the subtree's triangle masks
-//      << 24 (a ray whose mask misses it skips the node), y = first triangle of the node,
-//      z, w = meta bytes of children 0-3 and 4-7, each: 0 = empty slot; internal child:
-//      0b001 << 5 | (24 + slot); leaf child: unary triangle count << 5 | triangle offset
-//  [2] x, y = qlo.x of children 0-7, z, w = qhi.x    [3] same for y    [4] same for z
-// Child boxes decode as origin + q * 2^(exponent - 127). Internal children of a node are
-// stored contiguously at x, in slot order (imask bit i = slot i is internal).
+// One node = 96 bytes, read by the shader as three 32-byte loads (u64vec4): on lavapipe each
+// load instruction costs about the same whatever its width, so nodes and triangles are sized
+// in 32-byte units. 32-bit words:
+//  0-2  origin xyz (float bits)     3  exponent x | y << 8 | z << 16 | imask << 24
+//  4    index of the first internal child node (internal children are consecutive, in slot
+//       order; imask bit s = slot s holds an internal child)
+//  5    first triangle of the node   6  leafMask: bits 3s..3s+n-1 set for a leaf in slot s
+//       with n triangles; a triangle's offset from word 5 is the count of set bits below it
+//  8-19 quantised child boxes: q[axis][lo, hi][slot], 8 bytes per row; a box decodes as
+//       origin + q * 2^(exponent - 127)
+//  20-21 childMask[slot]: union of the ray-mask bits of the triangles below the child
+// Child slots are assigned by direction (slot bit k set = child towards +axis k) so that the
+// traversal visits them nearest first for the ray's octant (Ylitie et al. 2017, Sec. 3.2).
 struct BvhNode {
     glm::vec3 origin;
     uint8_t exponent[3];
     uint8_t imask;
-    uint32_t childBase;  // low 24 bits; high 8 bits: subtree mask union
+    uint32_t childBase;
     uint32_t triangleBase;
-    uint8_t meta[8];
-    uint8_t q[3][2][8];  // [axis][lo, hi][child]
+    uint32_t leafMask;
+    uint32_t pad0;
+    uint8_t q[3][2][8];  // [axis][lo, hi][slot]
+    uint8_t childMask[8];
+    uint32_t pad1[2];
 };
-static_assert(sizeof(BvhNode) == 80);
+static_assert(sizeof(BvhNode) == 96);
 
-// A world-space triangle as the traversal reads it (3 vec4, bvh_tris.data[3 * i + k]):
-// Möller–Trumbore with precomputed edges, plus the caller's primitive id and mask.
+// A world-space triangle as the traversal reads it (64 bytes, two 32-byte loads, one cache
+// line): Möller–Trumbore with precomputed edges and normal, plus the caller's primitive id
+// and mask.
 struct BvhTriangle {
     glm::vec3 v0;
     uint32_t prim;  // index into the input triangle list
     glm::vec3 e1;   // v1 - v0
     uint32_t mask;  // ray-mask bits of the triangle (low 8 bits)
     glm::vec3 e2;   // v2 - v0
-    uint32_t pad = 0;
+    uint32_t pad0 = 0;
+    glm::vec3 ng;   // cross(e1, e2) from the exact vertices, rounded once (slivers stay exact)
+    uint32_t pad1 = 0;
 };
-static_assert(sizeof(BvhTriangle) == 48);
+static_assert(sizeof(BvhTriangle) == 64);
 
 struct BvhBuildOptions {
     bool spatialSplits = true;  // RTC_BUILD_QUALITY_HIGH (SBVH); false: plain binned SAH
@@ -69,8 +80,9 @@ struct BvhBuild {
     BvhStats stats;
 };
 
-// Maximum tree depth; the GLSL traversal stack (BVH_STACK_SIZE) is sized from it.
-constexpr uint32_t kBvhMaxDepth = 24;
+// Maximum tree depth (Embree's maxDepth); the GLSL traversal stack (BVH_STACK_SIZE) holds
+// one entry per level.
+constexpr uint32_t kBvhMaxDepth = 32;
 
 // Throws UserError for out-of-range indices or masks above 8 bits. An empty triangle list
 // gives a single empty root (every ray misses). triMask may be empty (all 0xff).
@@ -87,6 +99,7 @@ std::vector<glm::ivec3> triangleAdjacency(const std::vector<glm::uvec3>& indices
 // bvh_nodes, bvh_tris, bvh_adjacency.
 struct BvhGpu {
     std::shared_ptr<gpu::Buffer> nodes, triangles, adjacency;
+    std::shared_ptr<gpu::Image> nodeTex, triTex;
     uint32_t nodeCount = 0, triangleCount = 0;
     void upload(gpu::Context& gpu, const BvhBuild& build);
     void bind(gpu::Bindings& bindings) const;

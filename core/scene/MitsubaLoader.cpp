@@ -411,9 +411,11 @@ public:
         } else {
             warn(node,
                  "texture type '" + type + "' is not supported; using a constant 0.5 instead");
+            mTextureCache[key] = {index, fallback};
+            return index;
         }
         p.reportUnused({"filter_type", "wrap_mode", "wrap_mode_u", "wrap_mode_v", "format",
-                        "max_anisotropy", "cache", "accurate", "filter_type"});
+                        "max_anisotropy", "cache", "accurate"});
         mTextureCache[key] = {index, fallback};
         return index;
     }
@@ -677,8 +679,8 @@ public:
                             "clearcoat_gloss", "anisotropic", "flatness", "diff_trans"});
             return m;
         } else {
+            // One warning for the whole element, not one per property.
             warn(node, "bsdf type '" + type + "' is not supported; using diffuse 0.5 instead");
-            p.reportUnused({});
             return m;
         }
         p.reportUnused({});

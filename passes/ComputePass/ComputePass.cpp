@@ -189,13 +189,16 @@ public:
         std::vector<PortDef> inputs = mInputs, outputs = mOutputs, persistent = mPersistent;
         if (name == "inputs") {
             inputs.clear();
-            parseMap("inputs", [&](auto& k, auto& x) { inputs.push_back(parsePort(k, x, true, false)); });
+            parseMap("inputs",
+                     [&](auto& k, auto& x) { inputs.push_back(parsePort(k, x, true, false)); });
         } else if (name == "outputs") {
             outputs.clear();
-            parseMap("outputs", [&](auto& k, auto& x) { outputs.push_back(parsePort(k, x, false, false)); });
+            parseMap("outputs",
+                     [&](auto& k, auto& x) { outputs.push_back(parsePort(k, x, false, false)); });
         } else if (name == "persistent") {
             persistent.clear();
-            parseMap("persistent", [&](auto& k, auto& x) { persistent.push_back(parsePort(k, x, false, true)); });
+            parseMap("persistent",
+                     [&](auto& k, auto& x) { persistent.push_back(parsePort(k, x, false, true)); });
         } else if (name == "constants") {
             std::vector<ConstantDef> defs;
             parseMap("constants", [&](auto& k, auto& x) {

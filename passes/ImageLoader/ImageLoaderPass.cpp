@@ -18,16 +18,21 @@ public:
     void onParamChanged(const std::string& name) override {
         if (name == "linearize") mImage.reset();
         if (name != "path") return;
-        mImage.reset();
-        mWidth = mHeight = 0;
+        // Read only the header now so the graph knows the size; pixels load on first use. A
+        // file that cannot be read leaves the previous image and size in place (Pass::setParam
+        // restores the previous path).
+        uint32_t width = 0, height = 0;
         std::string path = resolvePath(param<std::string>("path"));
-        if (path.empty()) return;
-        // Read only the header now so the graph knows the size; pixels load on first use.
-        try {
-            readImageSize(path, mWidth, mHeight);
-        } catch (const UserError& e) {
-            throw ParamError(std::string("parameter 'path': ") + e.what());
+        if (!path.empty()) {
+            try {
+                readImageSize(path, width, height);
+            } catch (const UserError& e) {
+                throw ParamError(std::string("parameter 'path': ") + e.what());
+            }
         }
+        mImage.reset();
+        mWidth = width;
+        mHeight = height;
     }
     bool paramChangesPorts(const std::string& name) const override { return name == "path"; }
     void execute(ExecuteContext& ctx) override {

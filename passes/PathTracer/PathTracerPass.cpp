@@ -33,8 +33,12 @@ public:
             defines["HAS_" + name] = ctx.has(aov) ? "1" : "0";
         }
         auto pipeline = ctx.shaders().pipeline("passes/path_tracer/path_tracer.comp", defines);
+        if (!mRayCounter) mRayCounter = ctx.gpu().createBuffer(16, "RayCounter");
+        ctx.cmd().fillBuffer(*mRayCounter, 0);
+        ctx.cmd().barrier();
         gpu::Bindings b;
         scene.bind(b);
+        b.set("RayCounter", mRayCounter);
         b.set("colorImage", ctx.texture("color"));
         for (auto [port, glsl] : {std::pair{"albedo", "albedoImage"}, {"normal", "normalImage"},
                                   {"direct", "directImage"}, {"indirect", "indirectImage"}})
@@ -54,6 +58,16 @@ public:
             .set("clampValue", float(param<double>("clamp")));
         ctx.cmd().dispatchThreads(*pipeline, b, &pc, ctx.width(), ctx.height());
     }
+    void frameCompleted(gpu::Context& gpu) override {
+        uint32_t rays = 0;
+        if (mRayCounter) gpu.downloadBuffer(*mRayCounter, &rays, sizeof(rays));
+        mRays = rays;
+    }
+    std::map<std::string, double> stats() const override { return {{"rays", double(mRays)}}; }
+
+private:
+    std::shared_ptr<gpu::Buffer> mRayCounter;
+    uint64_t mRays = 0;
 };
 
 LOOM_REGISTER_PASS(PathTracerPass, "PathTracer",

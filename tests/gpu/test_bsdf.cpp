@@ -246,19 +246,20 @@ Chi2Result chi2(const std::vector<double>& observed, const std::vector<double>& 
     return r;
 }
 
-// (cos theta, phi) histogram grid and the quadrature of the pdf over its cells. Each cell is
+// (cos theta, phi) histogram grid, and the quadrature of the pdf over its cells: each cell is
 // split into sub-rectangles integrated with the 2 x 2 Gauss-Legendre rule, uniform in theta
-// (smooth at the poles, where cos theta is a singular coordinate) and in phi. The rule is open,
-// so the horizon cos = 0, a cell edge where the pdf jumps, is never evaluated. Finer
-// subdivisions where lobes get sharp: rows at the horizon and the poles, and the forward
-// azimuths, where grazing lobes are only ~2 alpha cos(theta_o) wide in phi.
-struct SphereGrid {
+// (smooth at the poles, where cos theta is a singular coordinate) and in phi. The rule is open
+// and every known discontinuity of the pdf is a sub-interval edge: the horizon, and for rough
+// dielectrics the cone where the generalised half vector turns horizontal (the refracted pdf
+// jumps there). Finer subdivisions where lobes are sharp: rows at the horizon, the poles and
+// the discontinuity, and the forward azimuths, where grazing lobes are only ~2 alpha cos(theta_o)
+// wide in phi.
+struct Quadrature {
     static constexpr int kCos = 40, kPhi = 80;
     static constexpr int kSub = 6, kSubFine = 48;
-    std::vector<glm::vec4> dirs;
-    std::vector<double> weights;  // solid angle of each node
-    std::vector<int> cell;
-    std::shared_ptr<gpu::Buffer> buffer;
+    std::vector<glm::vec2> thetas, phis;  // (cos, sin) of each node
+    std::vector<double> thetaWeights, phiWeights;
+    std::vector<int> rows, cols;
 
     static int cellOf(const glm::vec3& w) {
         const double phi = std::atan2(double(w.y), double(w.x));
@@ -274,38 +275,68 @@ struct SphereGrid {
         for (int k = 0; k < 2 * sub; ++k) out.emplace_back(a + h * (k / 2 + gl[k % 2]), 0.5 * h);
     }
 
-    static SphereGrid& get() {
-        static SphereGrid grid = [] {
-            SphereGrid g;
-            std::vector<std::pair<double, double>> thetas, phis;
-            std::vector<int> rows, cols;
-            for (int c = 0; c < kCos; ++c) {
-                const bool fine = c <= 1 || c >= kCos - 2 || c == kCos / 2 - 1 || c == kCos / 2;
-                nodes(std::acos(-1.0 + 2.0 * (c + 1) / kCos), std::acos(-1.0 + 2.0 * c / kCos),
-                      fine ? kSubFine : kSub, thetas);
-                rows.resize(thetas.size(), c);
-            }
-            const int forward = int((kWoPhi) / (2.0 * kPi) * kPhi);  // bin of phi = kWoPhi - pi
-            for (int p = 0; p < kPhi; ++p) {
-                const bool fine = std::abs(p - forward) <= 2;
-                nodes(-kPi + 2.0 * kPi * p / kPhi, -kPi + 2.0 * kPi * (p + 1) / kPhi,
-                      fine ? kSubFine : kSub, phis);
-                cols.resize(phis.size(), p);
-            }
-            for (size_t i = 0; i < thetas.size(); ++i) {
-                const auto [theta, wt] = thetas[i];
-                for (size_t j = 0; j < phis.size(); ++j) {
-                    g.dirs.emplace_back(sphericalDirection(std::cos(theta), phis[j].first), 0.0f);
-                    g.weights.push_back(wt * std::sin(theta) * phis[j].second);
-                    g.cell.push_back(rows[i] * kPhi + cols[j]);
+    // breakCos: cosines where the pdf is discontinuous (besides the horizon).
+    explicit Quadrature(const std::vector<double>& breakCos) {
+        for (int c = 0; c < kCos; ++c) {
+            const double c0 = -1.0 + 2.0 * c / kCos, c1 = -1.0 + 2.0 * (c + 1) / kCos;
+            bool fine = c <= 1 || c >= kCos - 2 || c == kCos / 2 - 1 || c == kCos / 2;
+            // theta decreases with cos: the row spans [acos(c1), acos(c0)], split at breaks.
+            std::vector<double> edges = {std::acos(c1)};
+            for (double b : breakCos)
+                if (b > c0 && b < c1) {
+                    edges.push_back(std::acos(b));
+                    fine = true;
                 }
+            edges.push_back(std::acos(c0));
+            std::vector<std::pair<double, double>> ts;
+            for (size_t e = 0; e + 1 < edges.size(); ++e)
+                nodes(edges[e], edges[e + 1], fine ? kSubFine : kSub, ts);
+            for (auto [theta, w] : ts) {
+                thetas.emplace_back(std::cos(theta), std::sin(theta));
+                thetaWeights.push_back(w * std::sin(theta));
+                rows.push_back(c);
             }
-            g.buffer = Gpu::get().upload(g.dirs, "grid");
-            return g;
-        }();
-        return grid;
+        }
+        const int forward = int(kWoPhi / (2.0 * kPi) * kPhi);  // bin of phi = kWoPhi - pi
+        for (int p = 0; p < kPhi; ++p) {
+            std::vector<std::pair<double, double>> ps;
+            nodes(-kPi + 2.0 * kPi * p / kPhi, -kPi + 2.0 * kPi * (p + 1) / kPhi,
+                  std::abs(p - forward) <= 2 ? kSubFine : kSub, ps);
+            for (auto [phi, w] : ps) {
+                phis.emplace_back(std::cos(phi), std::sin(phi));
+                phiWeights.push_back(w);
+                cols.push_back(p);
+            }
+        }
     }
 };
+
+// N x integral of bsdf_pdf over every cell of the grid.
+std::vector<double> expectedCounts(const Material& material, glm::vec3 wo, double n,
+                                   const Quadrature& q) {
+    Gpu& g = Gpu::get();
+    const auto& pipe = g.pipeline("bsdf_pdf_grid.comp");
+    const uint32_t count = uint32_t(q.thetas.size() * q.phis.size());
+    auto mat = g.upload(std::vector<scene::MaterialGpu>{scene::packMaterial(material)}, "mat");
+    auto thetas = g.upload(q.thetas, "thetas"), phis = g.upload(q.phis, "phis");
+    auto out = g.ctx().createBuffer(count * sizeof(float), "pdfs");
+    gpu::Bindings b;
+    b.set("MaterialBuffer", mat).set("ThetaBuffer", thetas).set("PhiBuffer", phis).set(
+        "PdfBuffer", out);
+    gpu::PushConstants pc(pipe);
+    pc.set("wo", &wo.x, 3)
+        .set("thetaCount", uint32_t(q.thetas.size()))
+        .set("phiCount", uint32_t(q.phis.size()));
+    g.run(pipe, b, pc, count);
+    std::vector<float> pdfs(count);
+    g.ctx().downloadBuffer(*out, pdfs.data(), count * sizeof(float));
+    std::vector<double> cells(Quadrature::kCos * Quadrature::kPhi, 0.0);
+    for (size_t i = 0; i < q.thetas.size(); ++i)
+        for (size_t j = 0; j < q.phis.size(); ++j)
+            cells[q.rows[i] * Quadrature::kPhi + q.cols[j]] +=
+                n * pdfs[i * q.phis.size() + j] * q.thetaWeights[i] * q.phiWeights[j];
+    return cells;
+}
 
 struct Chi2Case {
     std::string name;
@@ -377,7 +408,7 @@ struct SamplingReport {
     size_t badEta = 0;         // samples whose BsdfSample.eta is wrong
 };
 
-constexpr uint32_t kChi2Samples = 1u << 20;
+const uint32_t kChi2Samples = std::getenv("CHI2_N") ? atoi(std::getenv("CHI2_N")) : (1u << 20);
 
 // Histogram of the sampled non-delta directions vs N * integral of bsdf_pdf over each cell.
 // Samples that failed or chose a delta lobe form one more cell, expected N (1 - integral).
@@ -386,15 +417,21 @@ SamplingReport runSamplingCase(const Chi2Case& c) {
     auto T0 = std::chrono::steady_clock::now();
     const SampleBatch batch = sampleBsdf(c.material, wo, kChi2Samples, kRadiance, std::getenv("CHI2_SEED") ? atoi(std::getenv("CHI2_SEED")) : 1);
     auto T1 = std::chrono::steady_clock::now();
-    SphereGrid& grid = SphereGrid::get();
+    // Rough dielectrics: the refracted pdf jumps where the generalised half vector
+    // eta wi + wo turns horizontal, wi.z = -wo.z / eta_rel.
+    std::vector<double> breaks;
+    if (c.material.type == BsdfType::RoughDielectric)
+        breaks.push_back(wo.z > 0.0f ? -wo.z / c.material.eta : -wo.z * c.material.eta);
+    const Quadrature quad(breaks);
     auto T2 = std::chrono::steady_clock::now();
-    const auto pdfs = evalBsdf(c.material, {glm::vec4(wo, 0.0f)}, grid.buffer,
-                               uint32_t(grid.dirs.size()), kRadiance);
+    std::vector<double> expected = expectedCounts(c.material, wo, kChi2Samples, quad);
     auto T3 = std::chrono::steady_clock::now();
     std::printf("TIMING sample %.3f grid %.3f pdf %.3f\n", std::chrono::duration<double>(T1-T0).count(), std::chrono::duration<double>(T2-T1).count(), std::chrono::duration<double>(T3-T2).count());
 
-    const int cells = SphereGrid::kCos * SphereGrid::kPhi;
-    std::vector<double> observed(cells + 1, 0.0), expected(cells + 1, 0.0);
+    const int cells = Quadrature::kCos * Quadrature::kPhi;
+    std::vector<double> observed(cells + 1, 0.0);
+    const double total = std::accumulate(expected.begin(), expected.end(), 0.0);
+    expected.push_back(std::max(0.0, double(kChi2Samples) - total));
     SamplingReport report;
     for (size_t i = 0; i < batch.samples.size(); ++i) {
         const glm::vec4 s = batch.samples[i];
@@ -403,7 +440,7 @@ SamplingReport runSamplingCase(const Chi2Case& c) {
             continue;
         }
         const glm::vec3 wi(s);
-        observed[SphereGrid::cellOf(wi)] += 1.0;
+        observed[Quadrature::cellOf(wi)] += 1.0;
         // Sampled f and pdf must be bsdf_eval and bsdf_pdf at wi: compare pdfs and f / pdf.
         const glm::vec4 chk = batch.checks[i];
         const double pdfErr = std::abs(double(chk.w) - s.w) / s.w;
@@ -423,20 +460,13 @@ SamplingReport runSamplingCase(const Chi2Case& c) {
         report.maxWeightError = std::max(report.maxWeightError, wErr);
         if (!(pdfErr <= 1e-4) || !(wErr <= 1e-4)) ++report.mismatched;
     }
-    double total = 0.0;
-    for (size_t i = 0; i < grid.dirs.size(); ++i) {
-        const double e = double(kChi2Samples) * pdfs[i].w * grid.weights[i];
-        expected[grid.cell[i]] += e;
-        total += e;
-    }
-    expected[cells] = std::max(0.0, double(kChi2Samples) - total);
     report.chi2 = chi2(observed, expected, kChi2Samples);
     if (std::getenv("CHI2_DEBUG")) {
         std::vector<int> idx(cells + 1);
         std::iota(idx.begin(), idx.end(), 0);
         auto contrib = [&](int i) { return expected[i] > 0 ? (observed[i]-expected[i])*(observed[i]-expected[i])/expected[i] : observed[i]; };
         std::sort(idx.begin(), idx.end(), [&](int a, int b) { return contrib(a) > contrib(b); });
-        for (int k = 0; k < 12; ++k) { int i = idx[k]; std::printf("  cell cos=%d phi=%d obs=%.0f exp=%.1f contrib=%.1f\n", i / SphereGrid::kPhi, i % SphereGrid::kPhi, observed[i], expected[i], contrib(i)); }
+        for (int k = 0; k < 12; ++k) { int i = idx[k]; std::printf("  cell cos=%d phi=%d obs=%.0f exp=%.1f contrib=%.1f\n", i / Quadrature::kPhi, i % Quadrature::kPhi, observed[i], expected[i], contrib(i)); }
         std::printf("  total expected %.1f residual obs %.0f exp %.1f\n", total, observed[cells], expected[cells]);
     }
     return report;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -427,24 +428,29 @@ TEST(Bvh, LayoutIsConservative) {
     const BvhBuild b = scene::buildBvh(m.positions, m.indices, m.masks, options);
     std::vector<int> seen(m.indices.size(), 0);
     for (const scene::BvhNode& n : b.nodes) {
+        uint32_t offset = 0;  // triangles of leaf slots follow each other in slot order
         for (int s = 0; s < 8; ++s) {
-            const uint32_t meta = n.meta[s];
-            if (meta == 0 || (meta & 31u) >= 24u) continue;
+            const uint32_t count = std::popcount((n.leafMask >> (3 * s)) & 7u);
+            if (count == 0) continue;
             glm::vec3 lo, hi;
             for (int a = 0; a < 3; ++a) {
                 const float scale = std::ldexp(1.0f, int(n.exponent[a]) - 127);
                 lo[a] = n.origin[a] + float(n.q[a][0][s]) * scale;
                 hi[a] = n.origin[a] + float(n.q[a][1][s]) * scale;
             }
-            for (uint32_t k = 0; k < 3; ++k) {
-                if (!((meta >> (5 + k)) & 1u)) continue;
-                const scene::BvhTriangle& t = b.triangles[n.triangleBase + (meta & 31u) + k];
+            uint32_t mask = 0;
+            for (uint32_t k = 0; k < count; ++k) {
+                const scene::BvhTriangle& t = b.triangles[n.triangleBase + offset + k];
                 ++seen[t.prim];
+                mask |= t.mask;
                 for (glm::vec3 p : {t.v0, t.v0 + t.e1, t.v0 + t.e2}) {
                     EXPECT_TRUE(glm::all(glm::lessThanEqual(lo, p + 1e-6f)) &&
                                 glm::all(glm::lessThanEqual(p - 1e-6f, hi)));
                 }
             }
+            EXPECT_EQ(n.childMask[s], mask);
+            EXPECT_EQ((n.imask >> s) & 1u, 0u);
+            offset += count;
         }
     }
     for (size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << "triangle " << i;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/graph/RenderGraph.h"
+#include "core/image/Image.h"
 #include "tests/support/TestSupport.h"
 
 namespace {
@@ -444,6 +445,33 @@ TEST(GraphValidation, RejectedComputePassEditKeepsItsPorts) {
     EXPECT_EQ(refl.ports()[1].name, "out");
     auto cg = g->compile(4, 4);
     EXPECT_EQ(cg.portResource.count("k.out"), 1u);
+}
+
+TEST(GraphValidation, RejectedImagePathKeepsTheImageSize) {
+    loom::test::TempDir tmp("loom-validation");
+    loom::writeImage(tmp / "small.exr", loom::ImageData::make(5, 3, 4, 0.5f));
+    const std::string text = R"({
+  "passes": [{"name": "src", "type": "ImageLoader", "params": {"path": "small.exr"}},
+             {"name": "tm", "type": "ToneMap"}],
+  "edges": [["src.output", "tm.input"]],
+  "outputs": ["tm.output"]
+})";
+    auto g = RenderGraph::parse(text, tmp / "graph.json");
+    auto size = [&] {
+        auto cg = g->compile(16, 16);
+        const auto& r = cg.resources[cg.portResource.at("src.output")];
+        return std::make_pair(r.width, r.height);
+    };
+    EXPECT_EQ(size(), std::make_pair(5u, 3u));
+    try {
+        g->setParam("src.path", "missing.exr");
+        FAIL() << "missing image accepted";
+    } catch (const loom::UserError& e) {
+        EXPECT_NE(std::string(e.what()).find("parameter 'path': missing.exr"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(g->getParam("src.path"), "small.exr");
+    EXPECT_EQ(size(), std::make_pair(5u, 3u)) << "the loader forgot its image's size";
 }
 
 TEST(GraphValidation, EdgeMixingPortAndPass) {

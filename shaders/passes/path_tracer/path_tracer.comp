@@ -24,6 +24,9 @@ layout(rgba32f) uniform writeonly image2D directImage;
 layout(rgba32f) uniform writeonly image2D indirectImage;
 #endif
 
+// Rays traced this frame (closest + shadow), for Mrays/s.
+layout(std430) buffer RayCounter { uint ray_count; };
+
 const uint STRATEGY_MIS = 0u;   // NEE + BSDF sampling, MIS
 const uint STRATEGY_BSDF = 1u;  // BSDF sampling only (emitters hit by chance)
 const uint STRATEGY_NEE = 2u;   // light sampling only for non-delta vertices
@@ -48,6 +51,7 @@ void main() {
 
     vec3 sum = vec3(0.0), sum_direct = vec3(0.0);
     vec3 first_albedo = vec3(0.0), first_normal = vec3(0.0);
+    uint rays = 0u;
     for (uint s = 0u; s < pc.spp; ++s) {
         // Camera ray: jittered film position, lens sample, shutter time.
         vec2 uv = (vec2(pixel) + rng_next2(rng)) / vec2(pc.frameSize);
@@ -64,6 +68,7 @@ void main() {
         vec3 prev_p = o;
         for (uint depth = 0u;; ++depth) {
             Hit hit;
+            ++rays;
             if (!trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit)) {
                 // Environment, MIS-weighted against light sampling of the environment.
                 vec3 Le = environment_radiance(d);
@@ -113,6 +118,7 @@ void main() {
                     if (any(greaterThan(f, vec3(0.0)))) {
                         vec3 so = offset_ray_origin(sh.sp.p, sh.sp.ng, ls.wi);
                         float tmax = ls.dist < 1e29 ? ls.dist * (1.0 - 1e-4) : 1e30;
+                        ++rays;
                         if (!trace_any(so, ls.wi, 0.0, tmax, BVH_MASK_ALL)) {
                             float w = 1.0;
                             if (!ls.is_delta && pc.strategy == STRATEGY_MIS)
@@ -148,6 +154,7 @@ void main() {
         sum += L;
         sum_direct += L_direct;
     }
+    atomicAdd(ray_count, rays);
     float inv = 1.0 / float(pc.spp);
     imageStore(colorImage, ivec2(pixel), vec4(sum * inv, 1.0));
 #if HAS_ALBEDO

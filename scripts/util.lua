@@ -1,0 +1,90 @@
+-- Helpers shared by the shipped scripts: `local util = require("util")` (modules next to the
+-- running script are found automatically).
+local util = {}
+
+-- Splits "a,b,c" into values: numbers and JSON literals are decoded, bare words stay strings.
+function util.parse_list(text)
+  local values = {}
+  for item in text:gmatch("[^,]+") do
+    local ok, v = pcall(loom.json_decode, item)
+    values[#values + 1] = ok and v or item
+  end
+  return values
+end
+
+-- Applies every PASS.PARAM=VALUE script argument to a renderer (VALUE is JSON or a bare word).
+function util.apply_param_args(r)
+  local keys = {}
+  for k in pairs(loom.args) do
+    if type(k) == "string" and k:find("%.") then keys[#keys + 1] = k end
+  end
+  table.sort(keys)
+  for _, k in ipairs(keys) do
+    local ok, value = pcall(loom.json_decode, loom.args[k])
+    r:set(k, ok and value or loom.args[k])
+  end
+end
+
+-- The reference image: read from `opts.path` when that file exists with the right size,
+-- otherwise rendered with `opts.graph` (default graphs/pt_reference.json) for `opts.frames`
+-- frames and written to `opts.path` (EXR) so the next run reuses it.
+function util.reference(opts)
+  local path = opts.path
+  if path and path ~= "" then
+    local ok, img = pcall(loom.read_image, path)
+    if ok and img:width() == opts.width and img:height() == opts.height then
+      print(string.format("reference: %s (%dx%d)", path, img:width(), img:height()))
+      return img
+    end
+  end
+  local r = loom.renderer{graph = opts.graph or "graphs/pt_reference.json", scene = opts.scene,
+                          width = opts.width, height = opts.height, seed = opts.seed or 1000}
+  if opts.spp and opts.spp > 0 then r:set("pt.samplesPerPixel", opts.spp) end
+  local gpu_ms = 0
+  for f = 1, opts.frames do
+    r:frame()
+    gpu_ms = gpu_ms + r:timings().frame_ms
+    loom.progress(f, opts.frames, "reference")
+  end
+  local img = r:image("accum.output")
+  if path and path ~= "" then img:write(path) end
+  print(string.format("reference: rendered %d frames x %d spp (%.0f ms GPU)%s", opts.frames,
+                      r:get("pt.samplesPerPixel"), gpu_ms,
+                      path and path ~= "" and (" -> " .. path) or ""))
+  r:close()
+  return img
+end
+
+-- Prints rows as an aligned text table. columns = {{key=, title=, fmt=}, ...}.
+function util.print_table(columns, rows)
+  local cells, widths = {}, {}
+  for c, col in ipairs(columns) do widths[c] = #(col.title or col.key) end
+  for i, row in ipairs(rows) do
+    cells[i] = {}
+    for c, col in ipairs(columns) do
+      local v = row[col.key]
+      local s = v == nil and "" or (col.fmt and string.format(col.fmt, v) or tostring(v))
+      cells[i][c] = s
+      widths[c] = math.max(widths[c], #s)
+    end
+  end
+  local function line(values)
+    local parts = {}
+    for c, s in ipairs(values) do
+      -- Text left-aligned in the first column, numbers right-aligned elsewhere.
+      parts[c] = c == 1 and s .. string.rep(" ", widths[c] - #s)
+                        or string.rep(" ", widths[c] - #s) .. s
+    end
+    print(table.concat(parts, "  "))
+  end
+  local titles, rule = {}, {}
+  for c, col in ipairs(columns) do
+    titles[c] = col.title or col.key
+    rule[c] = string.rep("-", widths[c])
+  end
+  line(titles)
+  line(rule)
+  for i = 1, #rows do line(cells[i]) end
+end
+
+return util
