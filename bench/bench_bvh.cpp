@@ -278,8 +278,8 @@ int main(int argc, char** argv) {
     const scene::BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, {});
     std::printf("scene: %zu triangles; BVH8: %u nodes (%.1f MB), %u leaves, %u triangle refs "
                 "(%.1f MB), depth %u, built in %.0f ms\n",
-                mesh.indices.size(), build.stats.nodes, build.nodes.size() * 80.0 / 1e6,
-                build.stats.leaves, build.stats.triangleRefs, build.triangles.size() * 48.0 / 1e6,
+                mesh.indices.size(), build.stats.nodes, build.nodes.size() * double(sizeof(scene::BvhNode)) / 1e6,
+                build.stats.leaves, build.stats.triangleRefs, build.triangles.size() * double(sizeof(scene::BvhTriangle)) / 1e6,
                 build.stats.depth, build.stats.buildMs);
 
     GpuTracer gpuTracer;

@@ -64,8 +64,9 @@ util.print_table(columns, rows)
 loom.write_csv(out .. "/ablation.csv", rows,
                {columns = {"index", "value", "frames", "relmse", "mape", "rmse"}})
 if #rows > 0 then
+  local series = {{name = string.format("%d frames", frames), x = xs, y = ys}}
   loom.plot{path = out .. "/ablation", title = "Ablation: " .. param,
             x_label = numeric and param or (param .. " (value index)"), y_label = "relMSE",
-            log_y = true, series = {{name = string.format("%d frames", frames), x = xs, y = ys}}}
+            log_y = util.all_positive(series), series = series}
 end
 print(string.format("wrote %s/ablation.csv and %s/ablation.png (+ .svg)", out, out))

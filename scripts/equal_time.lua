@@ -34,11 +34,14 @@ local rows, final, series_relmse, series_mape = {}, {}, {}, {}
 for c, cfg in ipairs(configs) do
   local r = loom.renderer{graph = "graphs/pt.json", scene = scene, width = width,
                           height = height, seed = loom.arg("seed", 1), params = cfg.params}
+  -- One untimed warm-up frame (first-use costs), then accumulation starts over.
+  r:frame()
+  r:reset()
   local spent, frames = 0, 0
   local xs, ys, ms = {}, {}, {}
   for k = 1, steps do
     local target = budget * 2 ^ (k - steps)
-    local n, t = r:run_for_ms(target - spent)
+    local n, t = r:run_for_ms(math.max(0, target - spent))
     frames, spent = frames + n, spent + t
     local img = r:image("accum.output")
     local row = {index = #rows + 1, config = cfg.name, budget_ms = target, gpu_ms = spent,
@@ -48,7 +51,8 @@ for c, cfg in ipairs(configs) do
     xs[k], ys[k], ms[k] = spent, row.relmse, row.mape
     loom.progress((c - 1) * steps + k, #configs * steps, "equal time")
   end
-  final[c] = rows[#rows]
+  final[c] = {}
+  for key, v in pairs(rows[#rows]) do final[c][key] = v end
   series_relmse[c] = {name = cfg.name, x = xs, y = ys}
   series_mape[c] = {name = cfg.name, x = xs, y = ms}
   local stem = string.format("%s/%s", out, (cfg.name:gsub("[^%w]+", "_")))
@@ -77,8 +81,8 @@ loom.write_csv(out .. "/equal_time.csv", rows,
                            "mape"}})
 local _, png = loom.plot{path = out .. "/equal_time", title = "relMSE vs GPU time (equal time)",
                          x_label = "GPU time (ms)", y_label = "relMSE", log_x = true,
-                         log_y = true, series = series_relmse}
+                         log_y = util.all_positive(series_relmse), series = series_relmse}
 loom.plot{path = out .. "/mape", title = "MAPE vs GPU time (equal time)",
-          x_label = "GPU time (ms)", y_label = "MAPE", log_x = true, log_y = true,
-          series = series_mape}
+          x_label = "GPU time (ms)", y_label = "MAPE", log_x = true,
+          log_y = util.all_positive(series_mape), series = series_mape}
 print(string.format("\nwrote %s/equal_time.csv, %s (+ .svg), %s/mape.png", out, png, out))

@@ -87,4 +87,14 @@ function util.print_table(columns, rows)
   for i = 1, #rows do line(cells[i]) end
 end
 
+-- True when every y value of every series is > 0 (a log axis can show them all).
+function util.all_positive(series)
+  for _, s in ipairs(series) do
+    for _, y in ipairs(s.y) do
+      if not (y > 0) then return false end
+    end
+  end
+  return true
+end
+
 return util

@@ -40,6 +40,7 @@ commands:
 const char* kRenderHelp = R"(usage: loom render GRAPH [options]
 
   --scene FILE              scene (.json Loom, .xml Mitsuba 0.5-3, .gltf/.glb, .obj)
+  --define NAME=VALUE       Mitsuba scene variable ($NAME), like mitsuba -D (repeatable)
   --width W, --height H     frame size (default 256 x 256)
   --frames N                frames to render (default 1)
   --seed K                  random seed (default 0); same seed, same image
@@ -142,6 +143,10 @@ int cmdRender(const std::vector<std::string>& args) {
         else if (a == "--seed") o.seed = parseUint(a, next());
         else if (a == "--device") o.device = next();
         else if (a == "--scene") o.scene = next();
+        else if (a == "--define") {
+            auto [k, v] = splitAssign(a, next());
+            o.sceneDefines[k] = v;
+        }
         else if (a == "--out") out = next();
         else if (a == "--output") outputs.push_back(splitAssign(a, next()));
         else if (a == "--set") sets.push_back(splitAssign(a, next()));

@@ -50,12 +50,17 @@ Renderer::Renderer(const Options& o)
     mCompiler = std::make_unique<ShaderCompiler>(defaultShaderPaths(), mGpu->cacheDir());
     mCompiler->addSearchPath(mGraph->sourceDir());
     mShaders = std::make_unique<ShaderLibrary>(*mGpu, *mCompiler);
-    if (!o.scene.empty()) loadScene(o.scene);
+    if (!o.scene.empty()) loadScene(o.scene, o.sceneDefines);
 }
 
 Renderer::~Renderer() = default;
 
-void Renderer::loadScene(const std::string& path) { setScene(scene::loadScene(path)); }
+void Renderer::loadScene(const std::string& path,
+                         const std::map<std::string, std::string>& defines) {
+    scene::SceneLoadOptions options;
+    options.defines = defines;
+    setScene(scene::loadScene(path, options));
+}
 
 void Renderer::setScene(scene::Scene s) {
     mScene = std::make_unique<scene::SceneGpu>(*mGpu, std::move(s));

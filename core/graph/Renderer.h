@@ -1,6 +1,7 @@
 #pragma once
 // A graph bound to a GPU context and a frame size, driven frame by frame. The CLI, Lua and
 // the inspector all render through this class.
+#include <map>
 #include <memory>
 #include <string>
 
@@ -23,6 +24,7 @@ public:
     struct Options {
         std::string graph;  // path to graph JSON
         std::string scene;  // scene file (.json, .xml, .gltf/.glb, .obj); "" = none
+        std::map<std::string, std::string> sceneDefines;  // Mitsuba $variables (-D)
         uint32_t width = 256, height = 256;
         uint32_t seed = 0;
         std::string device;
@@ -42,7 +44,8 @@ public:
     void reset();
     void setSeed(uint32_t seed) { mSeed = seed; }
     // Loads a scene (replacing any previous one); its camera drives the frames.
-    void loadScene(const std::string& path);
+    void loadScene(const std::string& path,
+                   const std::map<std::string, std::string>& defines = {});
     void setScene(scene::Scene scene);
     scene::SceneGpu* scene() { return mScene.get(); }
     // Animation time in frames (camera paths); constant unless the application steps it.

@@ -7,8 +7,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
 #include <limits>
 #include <unordered_map>
 
@@ -255,7 +253,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
     args.minLeafSize = 1;
     args.maxLeafSize = options.maxLeafSize;
     args.traversalCost = 1.0f;
-    args.intersectionCost = std::getenv("BVH_ICOST") ? float(std::atof(std::getenv("BVH_ICOST"))) : 1.0f;
+    args.intersectionCost = 1.0f;
     args.bvh = bvh;
     args.primitives = prims.data();
     args.primitiveCount = primCount;
@@ -315,6 +313,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
             if (slotChild[s] >= 0 && !src.children[slotChild[s]]->leaf) ++innerCount;
         node.childBase = uint32_t(out.nodes.size());
         node.triangleBase = uint32_t(out.triangles.size());
+        node.leafBits = src.mask << 24;
         uint32_t nextInner = uint32_t(out.nodes.size());
         out.nodes.resize(out.nodes.size() + innerCount);
         for (int s = 0; s < 8; ++s) {
@@ -336,7 +335,6 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
             }
             if (child->leaf) {
                 const auto* leaf = static_cast<const BuildLeaf*>(child);
-                uint32_t mask = 0;
                 for (uint32_t i = 0; i < leaf->count; ++i) {
                     const uint32_t p = leaf->prims[i];
                     const glm::uvec3 t = triangles[p];
@@ -346,15 +344,13 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
                     out.triangles.push_back(BvhTriangle{v0, p, glm::vec3(e1), masks[p],
                                                         glm::vec3(e2), 0u,
                                                         glm::vec3(glm::cross(e1, e2)), 0u});
-                    node.leafMask |= 1u << (3 * s + i);
-                    mask |= masks[p];
+                    node.leafBits |= 1u << (3 * s + i);
                 }
-                node.childMask[s] = uint8_t(mask);
                 ++out.stats.leaves;
             } else {
                 const auto* inner = static_cast<const BuildInner*>(child);
+                node.innerRank |= (nextInner - node.childBase) << (3 * s);
                 node.imask |= uint8_t(1u << s);
-                node.childMask[s] = uint8_t(inner->mask);
                 work.push_back({inner, nextInner++});
             }
         }
@@ -376,37 +372,34 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
 }
 
 void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build) {
-    // Empty arrays still get a small buffer: every binding must be valid.
-    auto make = [&](const void* data, size_t bytes, const char* name) {
-        auto buffer = gpu.createBuffer(std::max<size_t>(bytes, 16), name);
+    // Nodes as texels of a 2D image, rows of kBvhNodeImageWidth; the last row zero-padded.
+    constexpr uint32_t kTexelsPerNode = sizeof(BvhNode) / 16;
+    const size_t texels = std::max<size_t>(build.nodes.size(), 1) * kTexelsPerNode;
+    const size_t rows = (texels + kBvhNodeImageWidth - 1) / kBvhNodeImageWidth;
+    if (rows > 16384)
+        throw UserError(fmt::format("BVH of {} nodes exceeds the node image ({} rows of {})",
+                                    build.nodes.size(), 16384, kBvhNodeImageWidth));
+    std::vector<BvhNode> padded(rows * kBvhNodeImageWidth / kTexelsPerNode + 1);
+    std::copy(build.nodes.begin(), build.nodes.end(), padded.begin());
+    nodes = gpu.createImage(kBvhNodeImageWidth, uint32_t(rows), gpu::Format::RGBA32UI,
+                            "bvh_nodes");
+    gpu.uploadImage(*nodes, padded.data());
+    // Every binding must be valid: empty arrays still get a small buffer.
+    auto makeBuffer = [&](const void* data, size_t bytes, const char* name) {
+        auto buffer = gpu.createBuffer(std::max<size_t>(bytes, 64), name);
         if (bytes) gpu.uploadBuffer(*buffer, data, bytes);
         return buffer;
     };
-    nodes = make(build.nodes.data(), build.nodes.size() * sizeof(BvhNode), "bvh_nodes");
-    triangles = make(build.triangles.data(), build.triangles.size() * sizeof(BvhTriangle),
-                     "bvh_tris");
-    adjacency = make(build.adjacency.data(), build.adjacency.size() * sizeof(glm::ivec4),
-                     "bvh_adjacency");
-    {  // EXP_IMAGES prototype
-        auto img = [&](const void* data, size_t bytes, const char* name) {
-            const size_t texels = std::max<size_t>(bytes / 16, 1);
-            const uint32_t h = uint32_t((texels + 8191) / 8192);
-            auto image = gpu.createImage(8192, h, gpu::Format::RGBA32UI, name);
-            std::vector<uint8_t> padded(size_t(8192) * h * 16, 0);
-            std::memcpy(padded.data(), data, bytes);
-            gpu.uploadImage(*image, padded.data());
-            return image;
-        };
-        nodeTex = img(build.nodes.data(), build.nodes.size() * sizeof(BvhNode), "bvh_node_tex");
-        triTex = img(build.triangles.data(), build.triangles.size() * sizeof(BvhTriangle), "bvh_tri_tex");
-    }
+    triangles = makeBuffer(build.triangles.data(), build.triangles.size() * sizeof(BvhTriangle),
+                           "bvh_tris");
+    adjacency = makeBuffer(build.adjacency.data(), build.adjacency.size() * sizeof(glm::ivec4),
+                           "bvh_adjacency");
     nodeCount = uint32_t(build.nodes.size());
     triangleCount = uint32_t(build.triangles.size());
 }
 
 void BvhGpu::bind(gpu::Bindings& bindings) const {
     bindings.set("bvh_nodes", nodes).set("bvh_tris", triangles).set("bvh_adjacency", adjacency);
-    bindings.set("bvh_node_tex", nodeTex).set("bvh_tri_tex", triTex);
 }
 
 }  // namespace loom::scene

@@ -20,17 +20,19 @@ class Context;
 
 namespace loom::scene {
 
-// One node = 96 bytes, read by the shader as three 32-byte loads (u64vec4): on lavapipe each
-// load instruction costs about the same whatever its width, so nodes and triangles are sized
-// in 32-byte units. 32-bit words:
+// One node = 80 bytes = 5 RGBA32UI texels of the node image (texel i at (i % 8192, i / 8192)).
+// On lavapipe an image load is a branch-free gather while a buffer load is a per-lane loop,
+// so node fetches go through the image. 32-bit words:
 //  0-2  origin xyz (float bits)     3  exponent x | y << 8 | z << 16 | imask << 24
 //  4    index of the first internal child node (internal children are consecutive, in slot
 //       order; imask bit s = slot s holds an internal child)
-//  5    first triangle of the node   6  leafMask: bits 3s..3s+n-1 set for a leaf in slot s
-//       with n triangles; a triangle's offset from word 5 is the count of set bits below it
+//  5    first triangle of the node (leaf slots' triangles follow each other in slot order)
+//  6    leafBits: bits 3s..3s+n-1 set for a leaf in slot s with n triangles (a triangle's
+//       offset from word 5 = set bits below its bit) | mask << 24: union of the ray-mask bits
+//       of the triangles below the node (a ray whose mask misses it skips the subtree)
+//  7    innerRank: bits 3s..3s+2 = offset of slot s's internal child from word 4
 //  8-19 quantised child boxes: q[axis][lo, hi][slot], 8 bytes per row; a box decodes as
-//       origin + q * 2^(exponent - 127)
-//  20-21 childMask[slot]: union of the ray-mask bits of the triangles below the child
+//       origin + q * 2^(exponent - 127), rounded outwards at build time
 // Child slots are assigned by direction (slot bit k set = child towards +axis k) so that the
 // traversal visits them nearest first for the ray's octant (Ylitie et al. 2017, Sec. 3.2).
 struct BvhNode {
@@ -39,16 +41,17 @@ struct BvhNode {
     uint8_t imask;
     uint32_t childBase;
     uint32_t triangleBase;
-    uint32_t leafMask;
-    uint32_t pad0;
+    uint32_t leafBits;
+    uint32_t innerRank;
     uint8_t q[3][2][8];  // [axis][lo, hi][slot]
-    uint8_t childMask[8];
-    uint32_t pad1[2];
 };
-static_assert(sizeof(BvhNode) == 96);
+static_assert(sizeof(BvhNode) == 80);
 
-// A world-space triangle as the traversal reads it (64 bytes, two 32-byte loads, one cache
-// line): Möller–Trumbore with precomputed edges and normal, plus the caller's primitive id
+// Texels per row of the node image (GLSL: BVH_NODE_TEXEL).
+constexpr uint32_t kBvhNodeImageWidth = 8192;
+
+// A world-space triangle as the traversal reads it (64 bytes: two 32-byte buffer loads, one
+// cache line): Möller–Trumbore with precomputed edges and normal, the caller's primitive id
 // and mask.
 struct BvhTriangle {
     glm::vec3 v0;
@@ -95,11 +98,12 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
 // the edge in input order, so walking the neighbours still visits each of them.
 std::vector<glm::ivec3> triangleAdjacency(const std::vector<glm::uvec3>& indices);
 
-// The BVH on the device. bind() sets the buffers by the GLSL names of bvh.glsl:
-// bvh_nodes, bvh_tris, bvh_adjacency.
+// The BVH on the device. bind() sets the resources by the GLSL names of bvh.glsl:
+// bvh_nodes (RGBA32UI image), bvh_tris (buffer), bvh_adjacency (buffer, used by kernels
+// that define BVH_ADJACENCY).
 struct BvhGpu {
-    std::shared_ptr<gpu::Buffer> nodes, triangles, adjacency;
-    std::shared_ptr<gpu::Image> nodeTex, triTex;
+    std::shared_ptr<gpu::Image> nodes;
+    std::shared_ptr<gpu::Buffer> triangles, adjacency;
     uint32_t nodeCount = 0, triangleCount = 0;
     void upload(gpu::Context& gpu, const BvhBuild& build);
     void bind(gpu::Bindings& bindings) const;

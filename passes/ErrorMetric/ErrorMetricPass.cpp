@@ -31,6 +31,12 @@ public:
         if (img->width() != ref->width() || img->height() != ref->height())
             throw UserError(fmt::format("image is {}x{} but reference is {}x{}", img->width(),
                                         img->height(), ref->width(), ref->height()));
+        // The per-pixel image and the reduction cover the frame: another size would read
+        // outside the inputs and average in pixels that do not exist.
+        if (img->width() != ctx.width() || img->height() != ctx.height())
+            throw UserError(fmt::format("image and reference are {}x{} but the frame is {}x{}; "
+                                        "render at the images' size",
+                                        img->width(), img->height(), ctx.width(), ctx.height()));
         Metric m = parseMetric(param<std::string>("metric"));
         uint32_t size[2] = {ctx.width(), ctx.height()};
         gpu::PushConstants pc(*mPixel);

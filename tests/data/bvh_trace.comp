@@ -5,7 +5,11 @@
 #include "lib/bvh.glsl"
 
 layout(local_size_x = 64) in;
+#ifndef BVH_NO_INT64
+layout(std430) readonly buffer Rays { u64vec4 data[]; } rays;  // one 32-byte load per ray
+#else
 layout(std430) readonly buffer Rays { vec4 data[]; } rays;
+#endif
 layout(std430) writeonly buffer Results { uvec4 data[]; } results;
 layout(push_constant) uniform Params {
     uint rayCount;
@@ -16,7 +20,13 @@ layout(push_constant) uniform Params {
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.rayCount) return;
+#ifndef BVH_NO_INT64
+    u64vec4 r = rays.data[i];
+    vec4 a = uintBitsToFloat(uvec4(unpack32(r.x), unpack32(r.y)));
+    vec4 b = uintBitsToFloat(uvec4(unpack32(r.z), unpack32(r.w)));
+#else
     vec4 a = rays.data[2u * i], b = rays.data[2u * i + 1u];
+#endif
     if (pc.anyHit != 0u) {
         results.data[i] = uvec4(trace_any(a.xyz, b.xyz, a.w, b.w, pc.mask) ? 1u : 0u, 0u, 0u, 0u);
     } else {

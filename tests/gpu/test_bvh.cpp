@@ -430,7 +430,7 @@ TEST(Bvh, LayoutIsConservative) {
     for (const scene::BvhNode& n : b.nodes) {
         uint32_t offset = 0;  // triangles of leaf slots follow each other in slot order
         for (int s = 0; s < 8; ++s) {
-            const uint32_t count = std::popcount((n.leafMask >> (3 * s)) & 7u);
+            const uint32_t count = std::popcount((n.leafBits >> (3 * s)) & 7u);
             if (count == 0) continue;
             glm::vec3 lo, hi;
             for (int a = 0; a < 3; ++a) {
@@ -448,7 +448,7 @@ TEST(Bvh, LayoutIsConservative) {
                                 glm::all(glm::lessThanEqual(p - 1e-6f, hi)));
                 }
             }
-            EXPECT_EQ(n.childMask[s], mask);
+            EXPECT_EQ((n.leafBits >> 24) & mask, mask);
             EXPECT_EQ((n.imask >> s) & 1u, 0u);
             offset += count;
         }

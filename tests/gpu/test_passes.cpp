@@ -533,6 +533,17 @@ TEST(PassesGpu, ErrorMetricZeroForIdenticalImages) {
     auto r = makeRenderer(std::move(graph), 5, 3);
     r->frame();
     EXPECT_EQ(r->graph().findPass("em")->stats().at("mse"), 0.0);
+
+    // A frame of another size is an error, not a metric over pixels that do not exist.
+    r->resize(8, 8);
+    try {
+        r->frame();
+        ADD_FAILURE() << "metric computed over a frame larger than the images";
+    } catch (const loom::UserError& e) {
+        EXPECT_STREQ(e.what(),
+                     "pass 'em' (ErrorMetric): image and reference are 5x3 but the "
+                     "frame is 8x8; render at the images' size");
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
