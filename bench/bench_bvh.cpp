@@ -2,7 +2,8 @@
 // rtcIntersect1/rtcOccluded1 on the same CPU and the same rays: coherent primary rays from a
 // pinhole camera and incoherent diffuse bounces. Prints Mrays/s and the ratio.
 //   bench_bvh [--width W] [--height H] [--reps N] [--detail N] [--spheres N] [--embree 0|1]
-//             [--define NAME=VALUE]...   (shader variants of lib/bvh.glsl)
+//             [--define NAME=VALUE]...   (shader variants of lib/bvh.glsl; BVH_STATS prints
+//             nodes and triangles visited per ray)
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -48,7 +49,8 @@ void addSphere(SceneMesh& m, glm::vec3 c, float r, uint32_t rings, uint32_t segm
     }
     for (uint32_t i = 0; i < rings; ++i) {
         for (uint32_t s = 0; s < segments; ++s) {
-            const uint32_t a = base + i * segments + s, b = base + i * segments + (s + 1) % segments;
+            const uint32_t a = base + i * segments + s,
+                           b = base + i * segments + (s + 1) % segments;
             if (i > 0) m.indices.push_back({a, b, a + segments});
             if (i + 1 < rings) m.indices.push_back({b, b + segments, a + segments});
         }
@@ -61,7 +63,8 @@ SceneMesh makeScene(uint32_t detail, uint32_t spheres) {
     SceneMesh m;
     const uint32_t n = detail;
     auto height = [](float x, float z) {
-        return 0.6f * std::sin(0.35f * x) * std::cos(0.27f * z) + 0.15f * std::sin(1.7f * x + 0.4f * z);
+        return 0.6f * std::sin(0.35f * x) * std::cos(0.27f * z) +
+               0.15f * std::sin(1.7f * x + 0.4f * z);
     };
     for (uint32_t j = 0; j <= n; ++j) {
         for (uint32_t i = 0; i <= n; ++i) {
@@ -100,7 +103,8 @@ std::vector<Ray> primaryRays(uint32_t w, uint32_t h) {
         for (uint32_t tx = 0; tx < w; tx += 8) {
             for (uint32_t y = ty; y < std::min(ty + 8, h); ++y) {
                 for (uint32_t x = tx; x < std::min(tx + 8, w); ++x) {
-                    const float sx = (2.0f * (float(x) + 0.5f) / float(w) - 1.0f) * tanHalf * aspect;
+                    const float sx =
+                        (2.0f * (float(x) + 0.5f) / float(w) - 1.0f) * tanHalf * aspect;
                     const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(h)) * tanHalf;
                     const glm::vec3 d = glm::normalize(fwd + sx * right + sy * up);
                     rays.push_back({glm::vec4(eye, 0.0f), glm::vec4(d, INFINITY)});
@@ -202,6 +206,7 @@ struct GpuTracer {
     std::shared_ptr<gpu::Buffer> rayBuf, results;
     uint32_t rayCount = 0;
     bool anyHit = false;
+    bool stats = false;  // kernel compiled with BVH_STATS
 
     void setRays(const std::vector<Ray>& rays, bool any) {
         rayBuf = gpu->createBuffer(rays.size() * sizeof(Ray), "rays");
@@ -223,8 +228,7 @@ struct GpuTracer {
         const auto w0 = Clock::now();
         const double c0 = processCpuSeconds();
         gpu->submit(*cmd);
-        return {std::chrono::duration<double>(Clock::now() - w0).count(),
-                processCpuSeconds() - c0};
+        return {std::chrono::duration<double>(Clock::now() - w0).count(), processCpuSeconds() - c0};
     }
 
     // Prim (or ~0u) / occluded flag per ray of the last run.
@@ -233,7 +237,7 @@ struct GpuTracer {
         gpu->downloadBuffer(*results, hits.data(), hits.size() * sizeof(glm::uvec4));
         out.resize(rayCount);
         for (size_t i = 0; i < rayCount; ++i) out[i] = anyHit ? hits[i].x : hits[i].y;
-        if (std::getenv("BVH_STATS") && !anyHit) {  // EXP_STATS: nodes, triangles per ray
+        if (stats && !anyHit) {  // BVH_STATS kernel: nodes, triangles per ray
             double n = 0, t = 0, n8 = 0, t8 = 0;
             for (size_t i = 0; i < rayCount; i += 8) {
                 uint32_t mn = 0, mt = 0;
@@ -243,8 +247,9 @@ struct GpuTracer {
                 }
                 n8 += 8.0 * mn, t8 += 8.0 * mt;
             }
-            std::printf("  per ray: %.1f nodes, %.1f triangles; SIMD-8 max: %.1f nodes, %.1f tris\n",
-                        n / rayCount, t / rayCount, n8 / rayCount, t8 / rayCount);
+            std::printf(
+                "  per ray: %.1f nodes, %.1f triangles; SIMD-8 max: %.1f nodes, %.1f tris\n",
+                n / rayCount, t / rayCount, n8 / rayCount, t8 / rayCount);
         }
     }
 };
@@ -258,12 +263,18 @@ int main(int argc, char** argv) {
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i];
         const uint32_t v = uint32_t(std::atoi(argv[i + 1]));
-        if (a == "--width") width = v;
-        else if (a == "--height") height = v;
-        else if (a == "--reps") reps = int(v);
-        else if (a == "--detail") detail = v;
-        else if (a == "--spheres") spheres = v;
-        else if (a == "--embree") embreeRuns = v != 0;
+        if (a == "--width")
+            width = v;
+        else if (a == "--height")
+            height = v;
+        else if (a == "--reps")
+            reps = int(v);
+        else if (a == "--detail")
+            detail = v;
+        else if (a == "--spheres")
+            spheres = v;
+        else if (a == "--embree")
+            embreeRuns = v != 0;
         else if (a == "--define") {  // NAME=VALUE, a shader variant to compare
             const std::string d = argv[i + 1];
             const size_t eq = d.find('=');
@@ -276,25 +287,32 @@ int main(int argc, char** argv) {
 
     const SceneMesh mesh = makeScene(detail, spheres);
     const scene::BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, {});
-    std::printf("scene: %zu triangles; BVH8: %u nodes (%.1f MB), %u leaves, %u triangle refs "
-                "(%.1f MB), depth %u, built in %.0f ms\n",
-                mesh.indices.size(), build.stats.nodes, build.nodes.size() * double(sizeof(scene::BvhNode)) / 1e6,
-                build.stats.leaves, build.stats.triangleRefs, build.triangles.size() * double(sizeof(scene::BvhTriangle)) / 1e6,
-                build.stats.depth, build.stats.buildMs);
+    std::printf(
+        "scene: %zu triangles; BVH8: %u nodes (%.1f MB), %u leaves, %u triangle refs "
+        "(%.1f MB), depth %u, built in %.0f ms\n",
+        mesh.indices.size(), build.stats.nodes,
+        build.nodes.size() * double(sizeof(scene::BvhNode)) / 1e6, build.stats.leaves,
+        build.stats.triangleRefs, build.triangles.size() * double(sizeof(scene::BvhTriangle)) / 1e6,
+        build.stats.depth, build.stats.buildMs);
 
     GpuTracer gpuTracer;
     gpuTracer.gpu = gpu::Context::create();
     ShaderCompiler compiler({LOOM_SOURCE_DIR "/shaders", LOOM_SOURCE_DIR}, "");
     auto shader = compiler.compile("tests/data/bvh_trace.comp", defines);
-    gpuTracer.pipeline = gpuTracer.gpu->createPipeline(shader->spirv, shader->reflection, "bvh_trace");
+    gpuTracer.pipeline =
+        gpuTracer.gpu->createPipeline(shader->spirv, shader->reflection, "bvh_trace");
     gpuTracer.bvh.upload(*gpuTracer.gpu, build);
+    gpuTracer.stats = defines.count("BVH_STATS") > 0;
     const char* lpThreads = std::getenv("LP_NUM_THREADS");
     std::printf("device: %s (LP_NUM_THREADS=%s), CPU threads: %u\n",
                 gpuTracer.gpu->deviceInfo().name.c_str(), lpThreads ? lpThreads : "default",
                 std::thread::hardware_concurrency());
 
     RTCDevice device = rtcNewDevice(nullptr);
+    const auto e0 = Clock::now();
     EmbreeScene embree(device, mesh);
+    std::printf("Embree scene (RTC_BUILD_QUALITY_HIGH) built in %.0f ms\n",
+                std::chrono::duration<double, std::milli>(Clock::now() - e0).count());
 
     // Ray sets: primary, then diffuse bounces from the primary hits (Embree's hits, so both
     // tracers get identical rays), then shadow rays towards a point light from those hits.
@@ -320,13 +338,13 @@ int main(int argc, char** argv) {
             const glm::vec3 t = glm::normalize(std::abs(n.x) > 0.5f ? glm::cross(n, {0, 1, 0})
                                                                     : glm::cross(n, {1, 0, 0}));
             const glm::vec3 b = glm::cross(n, t);
-            const glm::vec3 d = std::sqrt(r1) * (std::cos(phi) * t + std::sin(phi) * b) +
-                                std::sqrt(1.0f - r1) * n;
+            const glm::vec3 d =
+                std::sqrt(r1) * (std::cos(phi) * t + std::sin(phi) * b) + std::sqrt(1.0f - r1) * n;
             const glm::vec3 o = p + 1e-3f * n;
             diffuse.push_back({glm::vec4(o, 0.0f), glm::vec4(glm::normalize(d), INFINITY)});
             const glm::vec3 toLight = light - o;
-            shadow.push_back({glm::vec4(o, 0.0f),
-                              glm::vec4(glm::normalize(toLight), glm::length(toLight))});
+            shadow.push_back(
+                {glm::vec4(o, 0.0f), glm::vec4(glm::normalize(toLight), glm::length(toLight))});
         }
     }
 
@@ -340,29 +358,31 @@ int main(int argc, char** argv) {
                         {"shadow, any hit", &shadow, true}};
     // Reps interleave the tracers so that load from other processes hits all of them alike;
     // best of reps for wall time and CPU time separately.
-    std::printf("\nMrays/s (wall clock, best of %d) and Mrays per CPU-second (all threads):\n", reps);
+    std::printf("\nMrays/s (wall clock, best of %d) and Mrays per CPU-second (all threads):\n",
+                reps);
     std::printf("%-28s %8s | %7s %7s %7s | %7s %7s %7s | %6s %6s %6s | %6s\n", "rays", "count",
                 "GLSL", "Emb 1T", "Emb 2T", "GLSL", "Emb 1T", "Emb 2T", "G/1T", "G/2T", "G/1T",
                 "differ");
-    std::printf("%-28s %8s | %23s | %23s | %13s %6s |\n", "", "", "wall Mrays/s",
-                "Mrays per CPU-s", "wall ratio", "CPU");
+    std::printf("%-28s %8s | %23s | %23s | %13s %6s |\n", "", "", "wall Mrays/s", "Mrays per CPU-s",
+                "wall ratio", "CPU");
     for (const Set& s : sets) {
         std::vector<uint32_t> g, e1, e2;
         gpuTracer.setRays(*s.rays, s.anyHit);
         Timing tg, t1, t2;
         for (int r = 0; r < reps; ++r) {
             tg.keepBest(gpuTracer.run());
-            if (r == 0 || embreeRuns) t1.keepBest(embreeTrace(embree.scene(), *s.rays, s.anyHit, 1, e1));
+            if (r == 0 || embreeRuns)
+                t1.keepBest(embreeTrace(embree.scene(), *s.rays, s.anyHit, 1, e1));
             if (embreeRuns) t2.keepBest(embreeTrace(embree.scene(), *s.rays, s.anyHit, 2, e2));
         }
         gpuTracer.readResults(g);
         size_t differ = 0;
         for (size_t i = 0; i < g.size(); ++i) differ += g[i] != e1[i];
         const double n = double(s.rays->size()) * 1e-6;
-        std::printf("%-28s %8zu | %7.2f %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %6.2f | %6zu\n",
-                    s.name, s.rays->size(), n / tg.wall, n / t1.wall, n / t2.wall, n / tg.cpu,
-                    n / t1.cpu, n / t2.cpu, t1.wall / tg.wall, t2.wall / tg.wall,
-                    t1.cpu / tg.cpu, differ);
+        std::printf(
+            "%-28s %8zu | %7.2f %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %6.2f | %6zu\n",
+            s.name, s.rays->size(), n / tg.wall, n / t1.wall, n / t2.wall, n / tg.cpu, n / t1.cpu,
+            n / t2.cpu, t1.wall / tg.wall, t2.wall / tg.wall, t1.cpu / tg.cpu, differ);
     }
     rtcReleaseDevice(device);
     return 0;

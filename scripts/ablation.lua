@@ -1,6 +1,6 @@
 -- ablation.lua: sweep one parameter at a fixed frame count; error vs a reference per value.
 --
---   loom run scripts/ablation.lua param=pt.maxBounces values=1,2,3,4,6,9 frames=16
+--   loom run scripts/ablation.lua param=pt.maxBounces values=1,2,3,4,6,9 frames=32
 --   loom run scripts/ablation.lua --shard 0/2 out=out/ablation/part0   # sharded:
 --   loom run scripts/ablation.lua --shard 1/2 out=out/ablation/part1   #   one value each
 --   loom merge out/ablation.csv out/ablation/part0/ablation.csv out/ablation/part1/ablation.csv
@@ -17,16 +17,14 @@ local param = loom.arg("param", "pt.maxBounces")
 local values = loom.args.values and util.parse_list(loom.args.values) or {1, 2, 3, 4, 6, 9}
 local graph = loom.arg("graph", "graphs/pt.json")
 local scene = loom.arg("scene", "scenes/cornell_box.json")
-local width, height = loom.arg("width", 128), loom.arg("height", 128)
-local frames = loom.arg("frames", 16)
+local width, height = loom.arg("width", 64), loom.arg("height", 64)
+local frames = loom.arg("frames", 32)
 local out = loom.arg("out", "out/ablation")
 local timings = loom.arg("timings", false)
 
-local ref_frames, ref_spp = loom.arg("ref_frames", 64), loom.arg("ref_spp", 64)
-local ref = util.reference{
-  path = loom.arg("reference", string.format("out/reference/ablation_%dx%d_%dx%dspp.exr", width,
-                                             height, ref_frames, ref_spp)),
-  scene = scene, width = width, height = height, frames = ref_frames, spp = ref_spp}
+local ref_frames, ref_spp = loom.arg("ref_frames", 16), loom.arg("ref_spp", 64)
+local ref = util.reference{path = loom.arg("reference"), scene = scene, width = width,
+                          height = height, frames = ref_frames, spp = ref_spp}
 
 local rows, xs, ys = {}, {}, {}
 local numeric = true

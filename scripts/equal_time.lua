@@ -1,6 +1,6 @@
 -- equal_time.lua: several path tracer settings at equal GPU time against a reference.
 --
---   loom run scripts/equal_time.lua [width=128 height=128 budget_ms=3000 steps=6 ...]
+--   loom run scripts/equal_time.lua [width=64 height=64 budget_ms=2000 steps=6 ...]
 --
 -- Each configuration renders graphs/pt.json on the scene until the summed GPU frame times
 -- reach budget_ms * 2^(k - steps) for k = 1..steps (r:run_for_ms); at every step the
@@ -13,8 +13,8 @@
 local util = require("util")
 
 local scene = loom.arg("scene", "scenes/cornell_box.json")
-local width, height = loom.arg("width", 128), loom.arg("height", 128)
-local budget = loom.arg("budget_ms", 3000.0)
+local width, height = loom.arg("width", 64), loom.arg("height", 64)
+local budget = loom.arg("budget_ms", 2000.0)
 local steps = loom.arg("steps", 6)
 local out = loom.arg("out", "out/equal_time")
 
@@ -24,11 +24,9 @@ local configs = {
   {name = "bsdf 1spp", params = {["pt.strategy"] = "bsdf", ["pt.samplesPerPixel"] = 1}},
 }
 
-local ref_frames, ref_spp = loom.arg("ref_frames", 64), loom.arg("ref_spp", 64)
-local ref = util.reference{
-  path = loom.arg("reference", string.format("%s/reference_%dx%d_%dx%dspp.exr", out, width,
-                                             height, ref_frames, ref_spp)),
-  scene = scene, width = width, height = height, frames = ref_frames, spp = ref_spp}
+local ref_frames, ref_spp = loom.arg("ref_frames", 16), loom.arg("ref_spp", 64)
+local ref = util.reference{path = loom.arg("reference"), scene = scene, width = width,
+                          height = height, frames = ref_frames, spp = ref_spp}
 
 local rows, final, series_relmse, series_mape = {}, {}, {}, {}
 for c, cfg in ipairs(configs) do

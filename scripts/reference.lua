@@ -1,15 +1,15 @@
 -- reference.lua: a high-spp reference image with a progress bar and ETA.
 --
---   loom run scripts/reference.lua scene=scenes/cornell_box.json width=256 height=256 \
---            frames=256 out=out/reference/cornell_box.exr
+--   loom run scripts/reference.lua scene=scenes/cornell_box.json width=128 height=128 \
+--            frames=32 out=out/reference/cornell_box.exr
 --
 -- Accumulates graphs/pt_reference.json (64 paths per pixel per frame, Russian roulette only
 -- after 8 bounces) and writes accum.output as EXR plus a tone-mapped PNG preview next to it.
 -- Arguments: graph, scene, width, height, frames, spp (0 = the graph's), seed, out.
 local graph = loom.arg("graph", "graphs/pt_reference.json")
 local scene = loom.arg("scene", "scenes/cornell_box.json")
-local width, height = loom.arg("width", 256), loom.arg("height", 256)
-local frames = loom.arg("frames", 256)
+local width, height = loom.arg("width", 128), loom.arg("height", 128)
+local frames = loom.arg("frames", 32)
 local spp = loom.arg("spp", 0)
 local out = loom.arg("out", "out/reference/cornell_box.exr")
 

@@ -12,7 +12,7 @@
 -- path, out.
 local graph = loom.arg("graph", "graphs/pt.json")
 local scene = loom.arg("scene", "scenes/cornell_box.json")
-local width, height = loom.arg("width", 256), loom.arg("height", 256)
+local width, height = loom.arg("width", 128), loom.arg("height", 128)
 local views = loom.arg("views", 24)
 local frames = loom.arg("frames", 16)
 local out = loom.arg("out", "out/turntable")

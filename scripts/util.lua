@@ -27,9 +27,15 @@ end
 
 -- The reference image: read from `opts.path` when that file exists with the right size,
 -- otherwise rendered with `opts.graph` (default graphs/pt_reference.json) for `opts.frames`
--- frames and written to `opts.path` (EXR) so the next run reuses it.
+-- frames of `opts.spp` paths and written to `opts.path` (EXR) so the next run reuses it.
+-- Default path: out/reference/<scene>_<W>x<H>_<frames>x<spp>spp.exr (shared by the scripts).
 function util.reference(opts)
   local path = opts.path
+  if path == nil then
+    local stem = opts.scene:match("([^/\\]+)%.%w+$") or "scene"
+    path = string.format("out/reference/%s_%dx%d_%dx%dspp.exr", stem, opts.width, opts.height,
+                         opts.frames, opts.spp)
+  end
   if path and path ~= "" then
     local ok, img = pcall(loom.read_image, path)
     if ok and img:width() == opts.width and img:height() == opts.height then

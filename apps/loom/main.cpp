@@ -253,7 +253,8 @@ int cmdMerge(const std::vector<std::string>& args) {
         if (a.rfind("--", 0) == 0) throw UsageError("merge: unknown option '" + a + "'");
         files.push_back(a);
     }
-    if (files.size() < 2) throw UsageError("merge: expected OUT.csv PART.csv... (see loom merge --help)");
+    if (files.size() < 2)
+        throw UsageError("merge: expected OUT.csv PART.csv... (see loom merge --help)");
     std::vector<std::string> parts(files.begin() + 1, files.end());
     for (auto& p : parts)
         if (std::filesystem::absolute(p) == std::filesystem::absolute(files[0]))

@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
 #include "core/gpu/Context.h"
 #include "core/util/Error.h"
@@ -34,10 +33,8 @@ struct BuildLeaf : BuildNode {
     uint32_t prims[RTC_BUILD_MAX_PRIMITIVES_PER_LEAF] = {};
 };
 
-struct BuildInput {
-    const std::vector<glm::vec3>* positions;
-    const std::vector<glm::uvec3>* triangles;
-};
+// Triangle corners by primitive id, contiguous: the split callback runs millions of times.
+using Corners = std::array<glm::vec3, 3>;
 
 void* createNode(RTCThreadLocalAllocator alloc, unsigned int childCount, void*) {
     void* mem = rtcThreadLocalAlloc(alloc, sizeof(BuildInner), 16);
@@ -48,7 +45,8 @@ void* createNode(RTCThreadLocalAllocator alloc, unsigned int childCount, void*) 
 
 void setNodeChildren(void* nodePtr, void** children, unsigned int childCount, void*) {
     auto* node = static_cast<BuildInner*>(nodePtr);
-    for (unsigned i = 0; i < childCount; ++i) node->children[i] = static_cast<BuildNode*>(children[i]);
+    for (unsigned i = 0; i < childCount; ++i)
+        node->children[i] = static_cast<BuildNode*>(children[i]);
 }
 
 void setNodeBounds(void* nodePtr, const RTCBounds** bounds, unsigned int childCount, void*) {
@@ -70,35 +68,31 @@ void* createLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, 
 // the plane, clipped to the reference's current bounds.
 void splitPrimitive(const RTCBuildPrimitive* prim, unsigned int dim, float pos, RTCBounds* left,
                     RTCBounds* right, void* user) {
-    const auto* in = static_cast<const BuildInput*>(user);
-    const glm::uvec3 tri = (*in->triangles)[prim->primID];
-    glm::vec3 v[3] = {(*in->positions)[tri.x], (*in->positions)[tri.y], (*in->positions)[tri.z]};
+    const Corners& v = static_cast<const Corners*>(user)[prim->primID];
     glm::vec3 lo[2] = {glm::vec3(INFINITY), glm::vec3(INFINITY)};
     glm::vec3 hi[2] = {glm::vec3(-INFINITY), glm::vec3(-INFINITY)};
-    auto grow = [&](int side, glm::vec3 p) {
-        lo[side] = glm::min(lo[side], p);
-        hi[side] = glm::max(hi[side], p);
-    };
     for (int i = 0; i < 3; ++i) {
-        glm::vec3 a = v[i], b = v[(i + 1) % 3];
-        if (a[dim] <= pos) grow(0, a);
-        if (a[dim] >= pos) grow(1, a);
-        if ((a[dim] < pos && b[dim] > pos) || (a[dim] > pos && b[dim] < pos)) {
-            glm::vec3 p = glm::mix(a, b, (pos - a[dim]) / (b[dim] - a[dim]));
+        const glm::vec3& a = v[i];
+        const glm::vec3& b = v[i == 2 ? 0 : i + 1];
+        const float da = a[dim] - pos, db = b[dim] - pos;
+        if (da <= 0.0f) lo[0] = glm::min(lo[0], a), hi[0] = glm::max(hi[0], a);
+        if (da >= 0.0f) lo[1] = glm::min(lo[1], a), hi[1] = glm::max(hi[1], a);
+        if ((da < 0.0f && db > 0.0f) || (da > 0.0f && db < 0.0f)) {  // edge crosses the plane
+            glm::vec3 p = a + (b - a) * (da / (da - db));
             p[dim] = pos;
-            grow(0, p);
-            grow(1, p);
+            for (int side = 0; side < 2; ++side)
+                lo[side] = glm::min(lo[side], p), hi[side] = glm::max(hi[side], p);
         }
     }
     const glm::vec3 plo(prim->lower_x, prim->lower_y, prim->lower_z);
     const glm::vec3 phi(prim->upper_x, prim->upper_y, prim->upper_z);
     RTCBounds* out[2] = {left, right};
-    for (int s = 0; s < 2; ++s) {
-        glm::vec3 l = glm::max(lo[s], plo), h = glm::min(hi[s], phi);
-        if (s == 0) h[dim] = std::min(h[dim], pos);
-        if (s == 1) l[dim] = std::max(l[dim], pos);
+    for (int side = 0; side < 2; ++side) {
+        glm::vec3 l = glm::max(lo[side], plo), h = glm::min(hi[side], phi);
+        if (side == 0) h[dim] = std::min(h[dim], pos);
+        if (side == 1) l[dim] = std::max(l[dim], pos);
         h = glm::max(h, l);  // an empty side (rounding) stays a valid box
-        *out[s] = RTCBounds{l.x, l.y, l.z, 0.0f, h.x, h.y, h.z, 0.0f};
+        *out[side] = RTCBounds{l.x, l.y, l.z, 0.0f, h.x, h.y, h.z, 0.0f};
     }
 }
 
@@ -135,30 +129,35 @@ std::array<int, 8> assignSlots(const BuildInner& node) {
     glm::vec3 parent(0.0f);
     for (uint32_t i = 0; i < node.count; ++i) {
         const RTCBounds& b = node.bounds[i];
-        c[i] = 0.5f * glm::vec3(b.lower_x + b.upper_x, b.lower_y + b.upper_y,
-                                b.lower_z + b.upper_z);
+        c[i] =
+            0.5f * glm::vec3(b.lower_x + b.upper_x, b.lower_y + b.upper_y, b.lower_z + b.upper_z);
         parent += c[i] / float(node.count);
     }
     struct Candidate {
         float cost;
         int child, slot;
     };
-    std::vector<Candidate> candidates;
+    std::array<Candidate, 64> candidates;
+    uint32_t n = 0;
     for (uint32_t i = 0; i < node.count; ++i) {
         for (int s = 0; s < 8; ++s) {
             glm::vec3 dir((s & 1) ? 1.0f : -1.0f, (s & 2) ? 1.0f : -1.0f, (s & 4) ? 1.0f : -1.0f);
-            candidates.push_back({-glm::dot(c[i] - parent, dir), int(i), s});
+            candidates[n++] = {-glm::dot(c[i] - parent, dir), int(i), s};
         }
     }
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+    std::sort(candidates.begin(), candidates.begin() + n,
+              [](const Candidate& a, const Candidate& b) {
+                  return a.cost < b.cost ||
+                         (a.cost == b.cost && a.child * 8 + a.slot < b.child * 8 + b.slot);
+              });
     std::array<int, 8> slotChild;
     slotChild.fill(-1);
     bool placed[8] = {};
-    for (const Candidate& k : candidates) {
-        if (placed[k.child] || slotChild[k.slot] >= 0) continue;
-        placed[k.child] = true;
-        slotChild[k.slot] = k.child;
+    for (uint32_t k = 0; k < n; ++k) {
+        const Candidate& c = candidates[k];
+        if (placed[c.child] || slotChild[c.slot] >= 0) continue;
+        placed[c.child] = true;
+        slotChild[c.slot] = c.child;
     }
     return slotChild;
 }
@@ -166,40 +165,44 @@ std::array<int, 8> assignSlots(const BuildInner& node) {
 }  // namespace
 
 std::vector<glm::ivec3> triangleAdjacency(const std::vector<glm::uvec3>& indices) {
-    // Undirected edge -> every (triangle, edge) using it, in input order.
-    std::unordered_map<uint64_t, std::vector<uint32_t>> edges;
-    edges.reserve(indices.size() * 2);
-    auto key = [](uint32_t a, uint32_t b) {
-        return (uint64_t(std::min(a, b)) << 32) | uint64_t(std::max(a, b));
-    };
+    // Every half-edge keyed by its undirected edge; sorting groups the uses of an edge in
+    // input order (the value breaks ties), then each use links to the next around the edge.
+    std::vector<std::pair<uint64_t, uint32_t>> halfEdges;
+    halfEdges.reserve(indices.size() * 3);
     for (uint32_t t = 0; t < indices.size(); ++t) {
-        for (int k = 0; k < 3; ++k) {
-            uint32_t a = indices[t][k], b = indices[t][(k + 1) % 3];
-            if (a == b) continue;  // degenerate edge: no neighbour
-            edges[key(a, b)].push_back(t * 3 + uint32_t(k));
+        const glm::uvec3 v = indices[t];
+        if (v.x == v.y || v.y == v.z || v.z == v.x) continue;  // degenerate: no neighbours
+        for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t a = v[k], b = v[(k + 1) % 3];
+            const uint64_t key = (uint64_t(std::min(a, b)) << 32) | uint64_t(std::max(a, b));
+            halfEdges.emplace_back(key, t * 3 + k);
         }
     }
+    std::sort(halfEdges.begin(), halfEdges.end());
     std::vector<glm::ivec3> adjacency(indices.size(), glm::ivec3(-1));
-    for (const auto& [edge, uses] : edges) {
-        if (uses.size() < 2) continue;
-        for (size_t i = 0; i < uses.size(); ++i) {
-            uint32_t next = uses[(i + 1) % uses.size()];
-            adjacency[uses[i] / 3][int(uses[i] % 3)] = int(next / 3);
+    for (size_t begin = 0, end; begin < halfEdges.size(); begin = end) {
+        for (end = begin + 1;
+             end < halfEdges.size() && halfEdges[end].first == halfEdges[begin].first;)
+            ++end;
+        if (end - begin < 2) continue;  // boundary edge
+        for (size_t i = begin; i < end; ++i) {
+            const uint32_t use = halfEdges[i].second;
+            const uint32_t next = halfEdges[i + 1 < end ? i + 1 : begin].second;
+            adjacency[use / 3][int(use % 3)] = int(next / 3);
         }
     }
     return adjacency;
 }
 
-BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
-                  const std::vector<glm::uvec3>& triangles,
+BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
                   const std::vector<uint32_t>& triMask, const BvhBuildOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     if (!triMask.empty() && triMask.size() != triangles.size())
-        throw UserError(fmt::format("buildBvh: {} triangle masks for {} triangles",
-                                    triMask.size(), triangles.size()));
+        throw UserError(fmt::format("buildBvh: {} triangle masks for {} triangles", triMask.size(),
+                                    triangles.size()));
     if (options.maxLeafSize < 1 || options.maxLeafSize > 3)
-        throw UserError(fmt::format("buildBvh: maxLeafSize {} is not in 1..3",
-                                    options.maxLeafSize));
+        throw UserError(
+            fmt::format("buildBvh: maxLeafSize {} is not in 1..3", options.maxLeafSize));
     std::vector<uint32_t> masks(triangles.size(), 0xffu);
     for (size_t i = 0; i < triMask.size(); ++i) {
         if (triMask[i] > 0xffu)
@@ -210,7 +213,8 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
 
     // Build primitives: one box per triangle; spatial splits need spare capacity.
     std::vector<RTCBuildPrimitive> prims;
-    prims.reserve(options.spatialSplits ? triangles.size() * 2 : triangles.size());
+    // Spatial splits need spare capacity; Embree splits while there is room.
+    prims.reserve(options.spatialSplits ? triangles.size() * 3 / 2 : triangles.size());
     glm::vec3 sceneLo(INFINITY), sceneHi(-INFINITY);
     for (uint32_t t = 0; t < triangles.size(); ++t) {
         glm::vec3 lo(INFINITY), hi(-INFINITY);
@@ -240,10 +244,15 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
     out.lower = sceneLo;
     out.upper = sceneHi;
 
-    RTCDevice device = rtcNewDevice(nullptr);
+    // Embree objects released on every path; the build nodes live in the RTCBVH's memory.
+    std::unique_ptr<RTCDeviceTy, void (*)(RTCDevice)> device(rtcNewDevice(nullptr),
+                                                             rtcReleaseDevice);
     if (!device) throw std::runtime_error("buildBvh: rtcNewDevice failed");
-    RTCBVH bvh = rtcNewBVH(device);
-    BuildInput input{&positions, &triangles};
+    std::unique_ptr<RTCBVHTy, void (*)(RTCBVH)> bvh(rtcNewBVH(device.get()), rtcReleaseBVH);
+    std::vector<Corners> corners(triangles.size());
+    for (size_t t = 0; t < triangles.size(); ++t)
+        corners[t] = {positions[triangles[t].x], positions[triangles[t].y],
+                      positions[triangles[t].z]};
     RTCBuildArguments args = rtcDefaultBuildArguments();
     args.byteSize = sizeof(args);
     args.buildQuality = options.spatialSplits ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
@@ -254,7 +263,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
     args.maxLeafSize = options.maxLeafSize;
     args.traversalCost = 1.0f;
     args.intersectionCost = 1.0f;
-    args.bvh = bvh;
+    args.bvh = bvh.get();
     args.primitives = prims.data();
     args.primitiveCount = primCount;
     args.primitiveArrayCapacity = prims.size();
@@ -263,22 +272,19 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
     args.setNodeBounds = setNodeBounds;
     args.createLeaf = createLeaf;
     args.splitPrimitive = splitPrimitive;
-    args.userPtr = &input;
+    args.userPtr = corners.data();
     auto* root = static_cast<BuildNode*>(rtcBuildBVH(&args));
-    if (!root) {
-        const RTCError err = rtcGetDeviceError(device);
-        rtcReleaseBVH(bvh);
-        rtcReleaseDevice(device);
-        throw std::runtime_error(fmt::format("buildBvh: rtcBuildBVH failed (error {})", int(err)));
-    }
+    if (!root)
+        throw std::runtime_error(fmt::format("buildBvh: rtcBuildBVH failed (Embree error {})",
+                                             int(rtcGetDeviceError(device.get()))));
 
     // A root leaf becomes the single child of an inner root.
     BuildInner rootWrap;
     if (root->leaf) {
         rootWrap.count = 1;
         rootWrap.children[0] = root;
-        rootWrap.bounds[0] = RTCBounds{sceneLo.x, sceneLo.y, sceneLo.z, 0.0f,
-                                       sceneHi.x, sceneHi.y, sceneHi.z, 0.0f};
+        rootWrap.bounds[0] =
+            RTCBounds{sceneLo.x, sceneLo.y, sceneLo.z, 0.0f, sceneHi.x, sceneHi.y, sceneHi.z, 0.0f};
         root = &rootWrap;
     }
     subtreeMask(root, masks, 1, out.stats.depth);
@@ -289,7 +295,9 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
         uint32_t index;
     };
     std::vector<Work> work{{static_cast<const BuildInner*>(root), 0}};
+    out.nodes.reserve(primCount / 4);
     out.nodes.resize(1);
+    out.triangles.reserve(primCount + primCount / 8);
     while (!work.empty()) {
         const Work w = work.back();
         work.pop_back();
@@ -356,8 +364,8 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
         }
         out.nodes[w.index] = node;
     }
-    rtcReleaseBVH(bvh);
-    rtcReleaseDevice(device);
+    bvh.reset();
+    device.reset();
 
     std::vector<glm::ivec3> adjacency = triangleAdjacency(triangles);
     out.adjacency.resize(adjacency.size());
@@ -366,8 +374,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
     out.stats.nodes = uint32_t(out.nodes.size());
     out.stats.triangleRefs = uint32_t(out.triangles.size());
     out.stats.buildMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;
 }
 
@@ -381,8 +388,7 @@ void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build) {
                                     build.nodes.size(), 16384, kBvhNodeImageWidth));
     std::vector<BvhNode> padded(rows * kBvhNodeImageWidth / kTexelsPerNode + 1);
     std::copy(build.nodes.begin(), build.nodes.end(), padded.begin());
-    nodes = gpu.createImage(kBvhNodeImageWidth, uint32_t(rows), gpu::Format::RGBA32UI,
-                            "bvh_nodes");
+    nodes = gpu.createImage(kBvhNodeImageWidth, uint32_t(rows), gpu::Format::RGBA32UI, "bvh_nodes");
     gpu.uploadImage(*nodes, padded.data());
     // Every binding must be valid: empty arrays still get a small buffer.
     auto makeBuffer = [&](const void* data, size_t bytes, const char* name) {

@@ -60,7 +60,7 @@ struct BvhTriangle {
     uint32_t mask;  // ray-mask bits of the triangle (low 8 bits)
     glm::vec3 e2;   // v2 - v0
     uint32_t pad0 = 0;
-    glm::vec3 ng;   // cross(e1, e2) from the exact vertices, rounded once (slivers stay exact)
+    glm::vec3 ng;  // cross(e1, e2) from the exact vertices, rounded once (slivers stay exact)
     uint32_t pad1 = 0;
 };
 static_assert(sizeof(BvhTriangle) == 64);
@@ -89,18 +89,18 @@ constexpr uint32_t kBvhMaxDepth = 32;
 
 // Throws UserError for out-of-range indices or masks above 8 bits. An empty triangle list
 // gives a single empty root (every ray misses). triMask may be empty (all 0xff).
-BvhBuild buildBvh(const std::vector<glm::vec3>& positions,
-                  const std::vector<glm::uvec3>& triangles,
+BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
                   const std::vector<uint32_t>& triMask, const BvhBuildOptions& options = {});
 
 // For triangle i, component k is the triangle across edge (v[k], v[k+1 mod 3]), or -1 on a
 // boundary. On non-manifold edges (more than two triangles) it is the next triangle around
-// the edge in input order, so walking the neighbours still visits each of them.
+// the edge in input order, so walking the neighbours still visits each of them. Triangles
+// with a repeated vertex index have no neighbours and are nobody's neighbour.
 std::vector<glm::ivec3> triangleAdjacency(const std::vector<glm::uvec3>& indices);
 
 // The BVH on the device. bind() sets the resources by the GLSL names of bvh.glsl:
-// bvh_nodes (RGBA32UI image), bvh_tris (buffer), bvh_adjacency (buffer, used by kernels
-// that define BVH_ADJACENCY).
+// bvh_nodes (RGBA32UI image), bvh_tris and bvh_adjacency (buffers); kernels that never call
+// bvh_adjacent() do not reflect bvh_adjacency.
 struct BvhGpu {
     std::shared_ptr<gpu::Image> nodes;
     std::shared_ptr<gpu::Buffer> triangles, adjacency;

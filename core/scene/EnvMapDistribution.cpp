@@ -74,9 +74,9 @@ EnvMapDistribution::EnvMapDistribution(const float* rgba, uint32_t width, uint32
     double power = 0.0;  // integral of Y dw
     for (size_t j = 0; j < H; ++j) {
         const double sinTheta = std::sin(kPi * (double(j) + 0.5) / double(H));
-        const double texelSolidAngle = 2.0 * kPi / double(W) *
-                                       (std::cos(kPi * double(j) / double(H)) -
-                                        std::cos(kPi * double(j + 1) / double(H)));
+        const double texelSolidAngle =
+            2.0 * kPi / double(W) *
+            (std::cos(kPi * double(j) / double(H)) - std::cos(kPi * double(j + 1) / double(H)));
         for (size_t i = 0; i < W; ++i) {
             const float* t = rgba + 4 * (j * W + i);
             for (int c = 0; c < 3; ++c) mRadiance[3 * (j * W + i) + c] = t[c];

@@ -30,8 +30,7 @@ public:
     // of toWorld is kept (orthonormalised).
     EnvMapDistribution(const float* rgba, uint32_t width, uint32_t height,
                        const glm::mat4& toWorld = glm::mat4(1.0f));
-    explicit EnvMapDistribution(const Texture& texture,
-                                const glm::mat4& toWorld = glm::mat4(1.0f));
+    explicit EnvMapDistribution(const Texture& texture, const glm::mat4& toWorld = glm::mat4(1.0f));
 
     uint32_t width() const { return mWidth; }
     uint32_t height() const { return mHeight; }

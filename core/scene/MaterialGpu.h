@@ -21,10 +21,10 @@ enum MaterialGpuFlags : uint32_t {
 inline constexpr uint32_t kMaterialNoTexture = 0xffffffffu;
 
 struct MaterialGpu {
-    glm::vec4 diffuse{0.5f, 0.5f, 0.5f, 0.0f};   // rgb diffuse reflectance, a alpha
-    glm::vec4 specular{1.0f, 1.0f, 1.0f, 1.5f};  // rgb specular reflectance, a eta
-    glm::vec4 transmittance{1.0f};               // rgb specular transmittance, a Fdr_int
-    glm::vec4 conductorEta{0.0f};                // rgb conductor eta, a unused
+    glm::vec4 diffuse{0.5f, 0.5f, 0.5f, 0.0f};     // rgb diffuse reflectance, a alpha
+    glm::vec4 specular{1.0f, 1.0f, 1.0f, 1.5f};    // rgb specular reflectance, a eta
+    glm::vec4 transmittance{1.0f};                 // rgb specular transmittance, a Fdr_int
+    glm::vec4 conductorEta{0.0f};                  // rgb conductor eta, a unused
     glm::vec4 conductorK{1.0f, 1.0f, 1.0f, 0.0f};  // rgb conductor k, a unused
     glm::uvec4 info{0u};                           // type (BsdfType), flags, reserved x2
     // reflectance, specular reflectance, normal map, reserved (kMaterialNoTexture = none)

@@ -6,8 +6,8 @@
 // Lua API reference: scripts/README.md.
 #include "core/script/LuaBindings.h"
 
-#include <lua.hpp>
 #include <unistd.h>
+#include <lua.hpp>
 
 #include <algorithm>
 #include <array>
@@ -115,8 +115,10 @@ std::string describe(lua_State* L, int i) {
         case LUA_TNUMBER:
             return lua_isinteger(L, i) ? fmt::format("number {}", lua_tointeger(L, i))
                                        : fmt::format("number {}", lua_tonumber(L, i));
-        case LUA_TSTRING: return fmt::format("string \"{}\"", lua_tostring(L, i));
-        default: return luaL_typename(L, i);
+        case LUA_TSTRING:
+            return fmt::format("string \"{}\"", lua_tostring(L, i));
+        default:
+            return luaL_typename(L, i);
     }
 }
 
@@ -155,15 +157,16 @@ int rawField(lua_State* L, int t, const char* key) {
 }
 
 // Throws when the options table has a key outside `valid` (names them all).
-void checkKeys(lua_State* L, int t, const std::string& fn, std::initializer_list<const char*> valid) {
+void checkKeys(lua_State* L, int t, const std::string& fn,
+               std::initializer_list<const char*> valid) {
     lua_pushnil(L);
     while (lua_next(L, t)) {
         lua_pop(L, 1);
         std::string list;
         for (auto* v : valid) list += (list.empty() ? "" : ", ") + std::string(v);
         if (lua_type(L, -1) != LUA_TSTRING)
-            throw ScriptError(fmt::format("{}: options must be named (key = value); valid keys: {}",
-                                          fn, list));
+            throw ScriptError(
+                fmt::format("{}: options must be named (key = value); valid keys: {}", fn, list));
         std::string key = lua_tostring(L, -1);
         if (std::none_of(valid.begin(), valid.end(), [&](const char* v) { return key == v; }))
             throw ScriptError(fmt::format("{}: unknown key '{}'; valid keys: {}", fn, key, list));
@@ -185,8 +188,8 @@ std::optional<double> optNumberField(lua_State* L, int t, const char* key, const
     return out;
 }
 
-std::optional<int64_t> optIntegerField(lua_State* L, int t, const char* key,
-                                       const std::string& fn, int64_t lo, int64_t hi) {
+std::optional<int64_t> optIntegerField(lua_State* L, int t, const char* key, const std::string& fn,
+                                       int64_t lo, int64_t hi) {
     std::optional<int64_t> out;
     if (rawField(L, t, key) != LUA_TNIL)
         out = argInteger(L, -1, fn, std::string("'") + key + "'", lo, hi);
@@ -197,15 +200,18 @@ std::optional<int64_t> optIntegerField(lua_State* L, int t, const char* key,
 bool optBoolField(lua_State* L, int t, const char* key, const std::string& fn, bool def) {
     int type = rawField(L, t, key);
     bool out = def;
-    if (type == LUA_TBOOLEAN) out = lua_toboolean(L, -1);
+    if (type == LUA_TBOOLEAN)
+        out = lua_toboolean(L, -1);
     else if (type != LUA_TNIL)
-        throw ScriptError(fmt::format("{}: '{}' must be a boolean, got {}", fn, key, describe(L, -1)));
+        throw ScriptError(
+            fmt::format("{}: '{}' must be a boolean, got {}", fn, key, describe(L, -1)));
     lua_pop(L, 1);
     return out;
 }
 
 // An array table of numbers at index i.
-std::vector<double> numberArray(lua_State* L, int i, const std::string& fn, const std::string& what) {
+std::vector<double> numberArray(lua_State* L, int i, const std::string& fn,
+                                const std::string& what) {
     i = lua_absindex(L, i);
     if (lua_type(L, i) != LUA_TTABLE)
         throw ScriptError(
@@ -215,8 +221,8 @@ std::vector<double> numberArray(lua_State* L, int i, const std::string& fn, cons
     for (lua_Integer k = 1; k <= n; ++k) {
         lua_rawgeti(L, i, k);
         if (lua_type(L, -1) != LUA_TNUMBER)
-            throw ScriptError(fmt::format("{}: {}[{}] must be a number, got {}", fn, what, k,
-                                          describe(L, -1)));
+            throw ScriptError(
+                fmt::format("{}: {}[{}] must be a number, got {}", fn, what, k, describe(L, -1)));
         out.push_back(lua_tonumber(L, -1));
         lua_pop(L, 1);
     }
@@ -230,8 +236,10 @@ std::vector<double> numberArray(lua_State* L, int i, const std::string& fn, cons
 json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
     idx = lua_absindex(L, idx);
     switch (lua_type(L, idx)) {
-        case LUA_TNIL: return nullptr;
-        case LUA_TBOOLEAN: return bool(lua_toboolean(L, idx));
+        case LUA_TNIL:
+            return nullptr;
+        case LUA_TBOOLEAN:
+            return bool(lua_toboolean(L, idx));
         case LUA_TNUMBER:
             if (lua_isinteger(L, idx)) return int64_t(lua_tointeger(L, idx));
             return double(lua_tonumber(L, idx));
@@ -248,7 +256,8 @@ json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
             lua_pushnil(L);
             while (lua_next(L, idx)) {
                 ++count;
-                if (lua_type(L, -2) == LUA_TNUMBER && lua_isinteger(L, -2) && lua_tointeger(L, -2) >= 1)
+                if (lua_type(L, -2) == LUA_TNUMBER && lua_isinteger(L, -2) &&
+                    lua_tointeger(L, -2) >= 1)
                     maxKey = std::max(maxKey, lua_tointeger(L, -2));
                 else
                     allIntegerKeys = false;
@@ -281,19 +290,25 @@ json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
             return obj;
         }
         default:
-            throw ScriptError(fmt::format("{}: a {} cannot be converted to JSON", where,
-                                          luaL_typename(L, idx)));
+            throw ScriptError(
+                fmt::format("{}: a {} cannot be converted to JSON", where, luaL_typename(L, idx)));
     }
 }
 
 void pushJson(lua_State* L, const json& j) {
     switch (j.type()) {
-        case json::value_t::boolean: lua_pushboolean(L, j.get<bool>()); break;
-        case json::value_t::number_integer: lua_pushinteger(L, j.get<int64_t>()); break;
+        case json::value_t::boolean:
+            lua_pushboolean(L, j.get<bool>());
+            break;
+        case json::value_t::number_integer:
+            lua_pushinteger(L, j.get<int64_t>());
+            break;
         case json::value_t::number_unsigned:
             lua_pushinteger(L, lua_Integer(j.get<uint64_t>()));
             break;
-        case json::value_t::number_float: lua_pushnumber(L, j.get<double>()); break;
+        case json::value_t::number_float:
+            lua_pushnumber(L, j.get<double>());
+            break;
         case json::value_t::string: {
             const auto& s = j.get_ref<const std::string&>();
             lua_pushlstring(L, s.data(), s.size());
@@ -316,7 +331,9 @@ void pushJson(lua_State* L, const json& j) {
             }
             break;
         }
-        default: lua_pushnil(L); break;
+        default:
+            lua_pushnil(L);
+            break;
     }
 }
 
@@ -405,9 +422,10 @@ int gcOwned(lua_State* L, const char* meta) {
 Renderer& self(lua_State* L, const char* method) {
     auto** p = static_cast<Renderer**>(luaL_testudata(L, 1, kRendererMeta));
     if (!p)
-        throw ScriptError(fmt::format("r:{}: expected a renderer as self, got {}; call it as "
-                                      "r:{}(...) with ':'",
-                                      method, describe(L, 1), method));
+        throw ScriptError(
+            fmt::format("r:{}: expected a renderer as self, got {}; call it as "
+                        "r:{}(...) with ':'",
+                        method, describe(L, 1), method));
     if (!*p) throw ScriptError(fmt::format("r:{}: this renderer was closed", method));
     return **p;
 }
@@ -429,8 +447,10 @@ void pushImage(lua_State* L, ImageData img) {
 int lRenderer(lua_State* L) {
     const std::string fn = "loom.renderer";
     if (lua_type(L, 1) != LUA_TTABLE)
-        throw ScriptError(fn + ": expects a table {graph=, scene=, width=, height=, seed=, "
-                               "device=, params=}, got " + describe(L, 1));
+        throw ScriptError(fn +
+                          ": expects a table {graph=, scene=, width=, height=, seed=, "
+                          "device=, params=}, got " +
+                          describe(L, 1));
     checkKeys(L, 1, fn, {"graph", "scene", "width", "height", "seed", "device", "params"});
     Host& h = host(L);
     auto graph = optStringField(L, 1, "graph", fn);
@@ -483,9 +503,10 @@ int rRunForMs(lua_State* L) {
     Renderer& r = self(L, "run_for_ms");
     double budget = argNumber(L, 2, "r:run_for_ms", "the time budget (ms)");
     if (!std::isfinite(budget) || budget < 0)
-        throw ScriptError(fmt::format("r:run_for_ms: the time budget must be a finite number "
-                                      ">= 0 (ms), got {}",
-                                      budget));
+        throw ScriptError(
+            fmt::format("r:run_for_ms: the time budget must be a finite number "
+                        ">= 0 (ms), got {}",
+                        budget));
     double spent = 0.0;
     int64_t frames = 0;
     while (spent < budget) {
@@ -507,14 +528,16 @@ int rReset(lua_State* L) {
     return 0;
 }
 
-int rClose(lua_State* L) { return gcOwned<Renderer>(L, kRendererMeta); }
+int rClose(lua_State* L) {
+    return gcOwned<Renderer>(L, kRendererMeta);
+}
 
 int rToString(lua_State* L) {
     auto** p = static_cast<Renderer**>(luaL_testudata(L, 1, kRendererMeta));
-    std::string s = !p || !*p ? "loom.Renderer (closed)"
-                              : fmt::format("loom.Renderer '{}' {}x{}, {} frames",
-                                            (*p)->graph().name(), (*p)->width(), (*p)->height(),
-                                            (*p)->framesRendered());
+    std::string s = !p || !*p
+                        ? "loom.Renderer (closed)"
+                        : fmt::format("loom.Renderer '{}' {}x{}, {} frames", (*p)->graph().name(),
+                                      (*p)->width(), (*p)->height(), (*p)->framesRendered());
     lua_pushstring(L, s.c_str());
     return 1;
 }
@@ -720,8 +743,9 @@ int rOutputs(lua_State* L) {
 
 scene::SceneGpu& sceneOf(Renderer& r, const std::string& fn) {
     if (!r.scene())
-        throw ScriptError(fn + ": this renderer has no scene (create it with "
-                               "loom.renderer{..., scene = \"file.json\"})");
+        throw ScriptError(fn +
+                          ": this renderer has no scene (create it with "
+                          "loom.renderer{..., scene = \"file.json\"})");
     return *r.scene();
 }
 
@@ -968,8 +992,8 @@ ImageData& selfImage(lua_State* L, const char* method) {
 
 void checkPixel(const ImageData& img, int64_t x, int64_t y, const std::string& fn) {
     if (x < 0 || y < 0 || x >= int64_t(img.width) || y >= int64_t(img.height))
-        throw ScriptError(fmt::format("{}: pixel ({}, {}) is outside the {}x{} image (0-based)",
-                                      fn, x, y, img.width, img.height));
+        throw ScriptError(fmt::format("{}: pixel ({}, {}) is outside the {}x{} image (0-based)", fn,
+                                      x, y, img.width, img.height));
 }
 
 // RGBA of a pixel whatever the channel count (grey -> r=g=b; missing alpha -> 1).
@@ -1017,7 +1041,8 @@ int iSet(lua_State* L) {
         if (c == 3 && lua_isnoneornil(L, 7)) break;
         v[c] = float(argNumber(L, 4 + c, "img:set", names[c]));
     }
-    if (img.channels == 1) img.at(uint32_t(x), uint32_t(y), 0) = v[0];
+    if (img.channels == 1)
+        img.at(uint32_t(x), uint32_t(y), 0) = v[0];
     else
         for (uint32_t c = 0; c < std::min(img.channels, 4u); ++c)
             img.at(uint32_t(x), uint32_t(y), c) = v[c];
@@ -1076,7 +1101,8 @@ int iToString(lua_State* L) {
 int lReadImage(lua_State* L) {
     std::string path = argString(L, 1, "loom.read_image", "the file path");
     bool linearize = lua_toboolean(L, 2);
-    pushImage(L, readImage(resolveInput(host(L), path, "loom.read_image", "image file"), linearize));
+    pushImage(L,
+              readImage(resolveInput(host(L), path, "loom.read_image", "image file"), linearize));
     return 1;
 }
 
@@ -1175,21 +1201,28 @@ int lWriteCsv(lua_State* L) {
         lua_rawgeti(L, 2, k);
         int row = lua_gettop(L);
         if (lua_type(L, row) != LUA_TTABLE)
-            throw ScriptError(fmt::format("{}: rows[{}] must be a table, got {}", fn, k,
-                                          describe(L, row)));
+            throw ScriptError(
+                fmt::format("{}: rows[{}] must be a table, got {}", fn, k, describe(L, row)));
         std::map<std::string, std::string> cells;
         lua_pushnil(L);
         while (lua_next(L, row)) {
             if (lua_type(L, -2) != LUA_TSTRING)
-                throw ScriptError(fmt::format("{}: rows[{}] has a non-string key {}; rows are "
-                                              "tables like {{name = value}}",
-                                              fn, k, describe(L, -2)));
+                throw ScriptError(
+                    fmt::format("{}: rows[{}] has a non-string key {}; rows are "
+                                "tables like {{name = value}}",
+                                fn, k, describe(L, -2)));
             std::string key = lua_tostring(L, -2);
             std::string cell;
             switch (lua_type(L, -1)) {
-                case LUA_TNUMBER: cell = formatNumber(L, -1); break;
-                case LUA_TSTRING: cell = lua_tostring(L, -1); break;
-                case LUA_TBOOLEAN: cell = lua_toboolean(L, -1) ? "true" : "false"; break;
+                case LUA_TNUMBER:
+                    cell = formatNumber(L, -1);
+                    break;
+                case LUA_TSTRING:
+                    cell = lua_tostring(L, -1);
+                    break;
+                case LUA_TBOOLEAN:
+                    cell = lua_toboolean(L, -1) ? "true" : "false";
+                    break;
                 default:
                     throw ScriptError(fmt::format(
                         "{}: rows[{}].{} is a {}; CSV cells must be numbers, strings or booleans",
@@ -1251,7 +1284,8 @@ int lWriteJson(lua_State* L) {
 
 int lReadJson(lua_State* L) {
     std::string path = argString(L, 1, "loom.read_json", "the path");
-    pushJson(L, JsonSource::load(resolveInput(host(L), path, "loom.read_json", "JSON file")).root());
+    pushJson(L,
+             JsonSource::load(resolveInput(host(L), path, "loom.read_json", "JSON file")).root());
     return 1;
 }
 
@@ -1270,10 +1304,12 @@ int lJsonEncode(lua_State* L) {
 int lPlot(lua_State* L) {
     const std::string fn = "loom.plot";
     if (lua_type(L, 1) != LUA_TTABLE)
-        throw ScriptError(fn + ": expects a table {path=, title=, x_label=, y_label=, log_x=, "
-                               "log_y=, series={{name=, x={...}, y={...}}, ...}}");
-    checkKeys(L, 1, fn,
-              {"path", "title", "x_label", "y_label", "log_x", "log_y", "series", "width", "height"});
+        throw ScriptError(fn +
+                          ": expects a table {path=, title=, x_label=, y_label=, log_x=, "
+                          "log_y=, series={{name=, x={...}, y={...}}, ...}}");
+    checkKeys(
+        L, 1, fn,
+        {"path", "title", "x_label", "y_label", "log_x", "log_y", "series", "width", "height"});
     PlotSpec spec;
     auto path = optStringField(L, 1, "path", fn);
     if (!path) throw ScriptError(fn + ": 'path' is required (writes PATH.svg and PATH.png)");
@@ -1352,8 +1388,10 @@ int lProgress(lua_State* L) {
     std::string line = fmt::format("{} [{}{}] {}/{} {:3d}%  {} elapsed  ETA {}", label,
                                    std::string(filled, '#'), std::string(kBar - filled, '.'), i, n,
                                    int(frac * 100), formatDuration(elapsed), eta);
-    if (tty) std::fprintf(stderr, "\r%s\x1b[K%s", line.c_str(), done ? "\n" : "");
-    else std::fprintf(stderr, "%s\n", line.c_str());
+    if (tty)
+        std::fprintf(stderr, "\r%s\x1b[K%s", line.c_str(), done ? "\n" : "");
+    else
+        std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
     if (done) p.active = false;
     return 0;
@@ -1377,12 +1415,16 @@ int lArg(lua_State* L) {
     };
     auto pushAs = [&](int type, bool integer, const std::string& s) {
         if (type == LUA_TNUMBER) {
-            if (lua_stringtonumber(L, s.c_str()) == 0) throw bad(integer ? "an integer" : "a number");
+            if (lua_stringtonumber(L, s.c_str()) == 0)
+                throw bad(integer ? "an integer" : "a number");
             if (integer && !lua_isinteger(L, -1)) throw bad("an integer");
         } else if (type == LUA_TBOOLEAN) {
-            if (s == "true" || s == "1" || s == "yes" || s == "on") lua_pushboolean(L, 1);
-            else if (s == "false" || s == "0" || s == "no" || s == "off") lua_pushboolean(L, 0);
-            else throw bad("a boolean (true/false)");
+            if (s == "true" || s == "1" || s == "yes" || s == "on")
+                lua_pushboolean(L, 1);
+            else if (s == "false" || s == "0" || s == "no" || s == "off")
+                lua_pushboolean(L, 0);
+            else
+                throw bad("a boolean (true/false)");
         } else {
             lua_pushlstring(L, s.data(), s.size());
         }
@@ -1431,10 +1473,10 @@ int lSweep(lua_State* L) {
     Host& h = host(L);
     size_t total = lua_rawlen(L, -1);
     if (h.options.shardCount > 1) {
-        size_t mine = total > h.options.shardIndex
-                          ? (total - h.options.shardIndex + h.options.shardCount - 1) /
-                                h.options.shardCount
-                          : 0;
+        size_t mine =
+            total > h.options.shardIndex
+                ? (total - h.options.shardIndex + h.options.shardCount - 1) / h.options.shardCount
+                : 0;
         logInfo("sweep '{}': shard {}/{} runs {} of {} values", name, h.options.shardIndex,
                 h.options.shardCount, mine, total);
     }
@@ -1458,63 +1500,71 @@ int lPassTypes(lua_State* L) {
 // ---------------------------------------------------------------------------------------------
 // Registration
 
-const luaL_Reg kRendererMethods[] = {
-    {"frame", guarded<rFrame>},
-    {"frames", guarded<rFrames>},
-    {"run_for_ms", guarded<rRunForMs>},
-    {"reset", guarded<rReset>},
-    {"close", guarded<rClose>},
-    {"width", guarded<rWidth>},
-    {"height", guarded<rHeight>},
-    {"resize", guarded<rResize>},
-    {"frame_count", guarded<rFrameCount>},
-    {"set_seed", guarded<rSetSeed>},
-    {"set", guarded<rSet>},
-    {"get", guarded<rGet>},
-    {"params", guarded<rParams>},
-    {"add_pass", guarded<rAddPass>},
-    {"remove_pass", guarded<rRemovePass>},
-    {"connect", guarded<rConnect>},
-    {"disconnect", guarded<rDisconnect>},
-    {"mark_output", guarded<rMarkOutput>},
-    {"unmark_output", guarded<rUnmarkOutput>},
-    {"save_graph", guarded<rSaveGraph>},
-    {"passes", guarded<rPasses>},
-    {"outputs", guarded<rOutputs>},
-    {"camera", guarded<rCamera>},
-    {"camera_path", guarded<rCameraPath>},
-    {"set_time", guarded<rSetTime>},
-    {"time", guarded<rTime>},
-    {"image", guarded<rImage>},
-    {"capture", guarded<rCapture>},
-    {"timings", guarded<rTimings>},
-    {"stats", guarded<rStats>},
-    {nullptr, nullptr}};
+const luaL_Reg kRendererMethods[] = {{"frame", guarded<rFrame>},
+                                     {"frames", guarded<rFrames>},
+                                     {"run_for_ms", guarded<rRunForMs>},
+                                     {"reset", guarded<rReset>},
+                                     {"close", guarded<rClose>},
+                                     {"width", guarded<rWidth>},
+                                     {"height", guarded<rHeight>},
+                                     {"resize", guarded<rResize>},
+                                     {"frame_count", guarded<rFrameCount>},
+                                     {"set_seed", guarded<rSetSeed>},
+                                     {"set", guarded<rSet>},
+                                     {"get", guarded<rGet>},
+                                     {"params", guarded<rParams>},
+                                     {"add_pass", guarded<rAddPass>},
+                                     {"remove_pass", guarded<rRemovePass>},
+                                     {"connect", guarded<rConnect>},
+                                     {"disconnect", guarded<rDisconnect>},
+                                     {"mark_output", guarded<rMarkOutput>},
+                                     {"unmark_output", guarded<rUnmarkOutput>},
+                                     {"save_graph", guarded<rSaveGraph>},
+                                     {"passes", guarded<rPasses>},
+                                     {"outputs", guarded<rOutputs>},
+                                     {"camera", guarded<rCamera>},
+                                     {"camera_path", guarded<rCameraPath>},
+                                     {"set_time", guarded<rSetTime>},
+                                     {"time", guarded<rTime>},
+                                     {"image", guarded<rImage>},
+                                     {"capture", guarded<rCapture>},
+                                     {"timings", guarded<rTimings>},
+                                     {"stats", guarded<rStats>},
+                                     {nullptr, nullptr}};
 
 const luaL_Reg kImageMethods[] = {
     {"width", guarded<iWidth>}, {"height", guarded<iHeight>}, {"channels", guarded<iChannels>},
     {"get", guarded<iGet>},     {"set", guarded<iSet>},       {"mean", guarded<iMean>},
     {"crop", guarded<iCrop>},   {"write", guarded<iWrite>},   {nullptr, nullptr}};
 
-const luaL_Reg kLoomFunctions[] = {
-    {"renderer", guarded<lRenderer>},   {"read_image", guarded<lReadImage>},
-    {"new_image", guarded<lNewImage>},  {"write_csv", guarded<lWriteCsv>},
-    {"read_csv", guarded<lReadCsv>},    {"write_json", guarded<lWriteJson>},
-    {"read_json", guarded<lReadJson>},  {"json_decode", guarded<lJsonDecode>},
-    {"json_encode", guarded<lJsonEncode>}, {"plot", guarded<lPlot>},
-    {"progress", guarded<lProgress>},   {"arg", guarded<lArg>},
-    {"sweep", guarded<lSweep>},         {"time_ms", guarded<lTimeMs>},
-    {"pass_types", guarded<lPassTypes>}, {nullptr, nullptr}};
+const luaL_Reg kLoomFunctions[] = {{"renderer", guarded<lRenderer>},
+                                   {"read_image", guarded<lReadImage>},
+                                   {"new_image", guarded<lNewImage>},
+                                   {"write_csv", guarded<lWriteCsv>},
+                                   {"read_csv", guarded<lReadCsv>},
+                                   {"write_json", guarded<lWriteJson>},
+                                   {"read_json", guarded<lReadJson>},
+                                   {"json_decode", guarded<lJsonDecode>},
+                                   {"json_encode", guarded<lJsonEncode>},
+                                   {"plot", guarded<lPlot>},
+                                   {"progress", guarded<lProgress>},
+                                   {"arg", guarded<lArg>},
+                                   {"sweep", guarded<lSweep>},
+                                   {"time_ms", guarded<lTimeMs>},
+                                   {"pass_types", guarded<lPassTypes>},
+                                   {nullptr, nullptr}};
 
-const luaL_Reg kMetricFunctions[] = {{"mse", guarded<lMetric<Metric::MSE>>},
-                                     {"relmse", guarded<lMetric<Metric::RelMSE>>},
-                                     {"rmse", guarded<lMetric<Metric::RMSE>>},
-                                     {"mape", guarded<lMetric<Metric::MAPE>>},
-                                     {"error_image", guarded<lErrorImage>},
-                                     {nullptr, nullptr}};
+const luaL_Reg kMetricFunctions[] = {
+    {"mse", guarded<lMetric<Metric::MSE>>},   {"relmse", guarded<lMetric<Metric::RelMSE>>},
+    {"rmse", guarded<lMetric<Metric::RMSE>>}, {"mape", guarded<lMetric<Metric::MAPE>>},
+    {"error_image", guarded<lErrorImage>},    {nullptr, nullptr}};
 
-int gcRenderer(lua_State* L) { return gcOwned<Renderer>(L, kRendererMeta); }
-int gcImage(lua_State* L) { return gcOwned<ImageData>(L, kImageMeta); }
+int gcRenderer(lua_State* L) {
+    return gcOwned<Renderer>(L, kRendererMeta);
+}
+int gcImage(lua_State* L) {
+    return gcOwned<ImageData>(L, kImageMeta);
+}
 
 void newMetatable(lua_State* L, const char* name, const luaL_Reg* methods, lua_CFunction gc,
                   lua_CFunction toString) {
@@ -1573,14 +1623,17 @@ int openModule(lua_State* L) {
 int messageHandler(lua_State* L) {
     const char* msg = lua_tostring(L, 1);
     if (!msg) {
-        if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING) msg = lua_tostring(L, -1);
-        else msg = lua_pushfstring(L, "(error object is a %s value)", luaL_typename(L, 1));
+        if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING)
+            msg = lua_tostring(L, -1);
+        else
+            msg = lua_pushfstring(L, "(error object is a %s value)", luaL_typename(L, 1));
     }
     luaL_traceback(L, L, msg, 1);
     return 1;
 }
 
-void parseNamedArgs(const std::vector<std::string>& args, std::map<std::string, std::string>& named) {
+void parseNamedArgs(const std::vector<std::string>& args,
+                    std::map<std::string, std::string>& named) {
     for (size_t i = 0; i < args.size(); ++i) {
         std::string a = args[i];
         bool dashed = a.rfind("--", 0) == 0;
@@ -1636,8 +1689,8 @@ struct LuaRuntime::Impl {
 
 LuaRuntime::LuaRuntime(Options options) : mImpl(std::make_unique<Impl>()) {
     if (options.shardCount == 0 || options.shardIndex >= options.shardCount)
-        throw UserError(fmt::format("shard {}/{}: expected I/N with 0 <= I < N",
-                                    options.shardIndex, options.shardCount));
+        throw UserError(fmt::format("shard {}/{}: expected I/N with 0 <= I < N", options.shardIndex,
+                                    options.shardCount));
     mImpl->host.options = std::move(options);
     parseNamedArgs(mImpl->host.options.args, mImpl->host.named);
     mImpl->L = luaL_newstate();
@@ -1687,7 +1740,9 @@ int LuaRuntime::runString(const std::string& code, const std::string& chunkName)
     return mImpl->run(luaL_loadbuffer(L, code.data(), code.size(), chunkName.c_str()), chunkName);
 }
 
-const std::string& LuaRuntime::lastError() const { return mImpl->lastError; }
+const std::string& LuaRuntime::lastError() const {
+    return mImpl->lastError;
+}
 
 void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
     auto slash = text.find('/');

@@ -15,9 +15,10 @@ namespace loom::script {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-// A 5x7 bitmap font for ASCII 32..126: five column bytes per glyph, bit 0 = top row (the
-// classic HD44780-style layout). Glyph cells advance 6 columns; rows 0..6.
-constexpr uint8_t kFont[95][5] = {
+// A 5x7 bitmap font for ASCII 32..126: five columns per glyph, bit 0 = top row (the classic
+// HD44780-style layout), rows 0..6 with the baseline on row 6; g, j, p, q, y are redrawn with
+// descenders on rows 7..8 (kDescenders). Glyph cells advance 6 columns.
+constexpr uint16_t kFont[95][5] = {
     {0x00, 0x00, 0x00, 0x00, 0x00}, {0x00, 0x00, 0x5F, 0x00, 0x00},  // space !
     {0x00, 0x07, 0x00, 0x07, 0x00}, {0x14, 0x7F, 0x14, 0x7F, 0x14},  // " #
     {0x24, 0x2A, 0x7F, 0x2A, 0x12}, {0x23, 0x13, 0x08, 0x64, 0x62},  // $ %
@@ -68,12 +69,27 @@ constexpr uint8_t kFont[95][5] = {
     {0x08, 0x04, 0x08, 0x10, 0x08},                                  // ~
 };
 
-constexpr int kGlyphAdvance = 6, kGlyphHeight = 7;
+struct Descender {
+    char c;
+    uint16_t columns[5];
+};
+constexpr Descender kDescenders[] = {{'g', {0x118, 0x124, 0x124, 0x124, 0x0FC}},
+                                     {'j', {0x080, 0x100, 0x100, 0x0FD, 0x000}},
+                                     {'p', {0x1FC, 0x024, 0x024, 0x024, 0x018}},
+                                     {'q', {0x018, 0x024, 0x024, 0x024, 0x1FC}},
+                                     {'y', {0x11C, 0x120, 0x120, 0x120, 0x0FC}}};
+
+const uint16_t* glyph(unsigned char ch) {
+    for (const auto& d : kDescenders)
+        if (d.c == char(ch)) return d.columns;
+    return kFont[(ch >= 32 && ch <= 126 ? ch : '?') - 32];
+}
+
+constexpr int kGlyphAdvance = 6, kGlyphHeight = 7, kGlyphRows = 9;
 
 // Tableau 10: distinct and colour-blind friendlier than the primaries.
-constexpr std::array<uint32_t, 10> kPalette = {0x4e79a7, 0xf28e2b, 0xe15759, 0x59a14f,
-                                                0xb07aa1, 0x76b7b2, 0xedc948, 0xff9da7,
-                                                0x9c755f, 0xbab0ac};
+constexpr std::array<uint32_t, 10> kPalette = {0x4e79a7, 0xf28e2b, 0xe15759, 0x59a14f, 0xb07aa1,
+                                               0x76b7b2, 0xedc948, 0xff9da7, 0x9c755f, 0xbab0ac};
 enum class MarkerShape { Circle, Square, Diamond, Triangle };
 
 struct Color {
@@ -174,7 +190,7 @@ Axis makeAxis(std::vector<double> values, bool log) {
     // Decades; every k-th decade when there are many; 1-2-5 when there are too few.
     int d0 = int(std::ceil(a.lo - 1e-9)), d1 = int(std::floor(a.hi + 1e-9));
     int decades = d1 - d0 + 1;
-    if (decades >= 2) {
+    if (decades >= 3) {
         int every = std::max(1, int(std::ceil(decades / 8.0)));
         for (int k = d0; k <= d1; ++k) {
             if ((k - d0) % every) continue;
@@ -191,15 +207,19 @@ Axis makeAxis(std::vector<double> values, bool log) {
         return a;
     }
     for (int k = d0 - 1; k <= d1 + 1; ++k)
-        for (int m : {1, 2, 5}) {
+        for (int m = 1; m <= 9; ++m) {
             double t = k + std::log10(double(m));
-            if (t >= a.lo && t <= a.hi) {
+            if (t < a.lo || t > a.hi) continue;
+            if (m == 1 || m == 2 || m == 5) {
                 a.major.push_back(t);
                 a.labels.push_back(compactNumber(m * std::pow(10.0, k)));
+            } else {
+                a.minor.push_back(t);
             }
         }
     if (a.major.size() < 3) {
         a.major.clear();
+        a.minor.clear();
         a.labels.clear();
         linearTicks(a, std::pow(10.0, a.lo), std::pow(10.0, a.hi), true);
     }
@@ -210,7 +230,9 @@ double textWidth(const std::string& s, double scale) {
     return s.empty() ? 0.0 : (kGlyphAdvance * double(s.size()) - 1.0) * scale;
 }
 
-bool usable(double v, bool log) { return std::isfinite(v) && (!log || v > 0); }
+bool usable(double v, bool log) {
+    return std::isfinite(v) && (!log || v > 0);
+}
 
 std::vector<Item> layout(const PlotSpec& spec) {
     if (spec.width < 200 || spec.height < 150)
@@ -218,8 +240,8 @@ std::vector<Item> layout(const PlotSpec& spec) {
     std::vector<double> xs, ys;
     for (auto& s : spec.series) {
         if (s.x.size() != s.y.size())
-            throw UserError(fmt::format("plot: series '{}' has {} x values but {} y values",
-                                        s.name, s.x.size(), s.y.size()));
+            throw UserError(fmt::format("plot: series '{}' has {} x values but {} y values", s.name,
+                                        s.x.size(), s.y.size()));
         for (size_t i = 0; i < s.x.size(); ++i)
             if (usable(s.x[i], spec.logX) && usable(s.y[i], spec.logY)) {
                 xs.push_back(s.x[i]);
@@ -332,7 +354,8 @@ std::vector<Item> layout(const PlotSpec& spec) {
             if (poly.points.size() >= 2) {  // sample segments too, so the legend avoids them
                 auto [x0, y0] = poly.points[poly.points.size() - 2];
                 for (int k = 1; k < 8; ++k)
-                    drawn.push_back({x0 + (px(s.x[i]) - x0) * k / 8, y0 + (py(s.y[i]) - y0) * k / 8});
+                    drawn.push_back(
+                        {x0 + (px(s.x[i]) - x0) * k / 8, y0 + (py(s.y[i]) - y0) * k / 8});
             }
         }
         flush();
@@ -361,7 +384,8 @@ std::vector<Item> layout(const PlotSpec& spec) {
         double pad = 10;
         std::array<std::pair<double, double>, 4> corners = {
             std::pair{right - pad - lw, top + pad}, std::pair{left + pad, top + pad},
-            std::pair{right - pad - lw, bottom - pad - lh}, std::pair{left + pad, bottom - pad - lh}};
+            std::pair{right - pad - lw, bottom - pad - lh},
+            std::pair{left + pad, bottom - pad - lh}};
         size_t best = 0, bestCount = SIZE_MAX;
         for (size_t c = 0; c < corners.size(); ++c) {
             auto [x0, y0] = corners[c];
@@ -405,11 +429,20 @@ std::string xmlEscape(const std::string& s) {
     std::string out;
     for (char c : s) {
         switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            default: out += c;
+            case '&':
+                out += "&amp;";
+                break;
+            case '<':
+                out += "&lt;";
+                break;
+            case '>':
+                out += "&gt;";
+                break;
+            case '"':
+                out += "&quot;";
+                break;
+            default:
+                out += c;
         }
     }
     return out;
@@ -425,7 +458,8 @@ std::string markerSvg(const Item& m) {
                                x, y, r, fill);
         case MarkerShape::Square:
             return fmt::format(
-                "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"{}\"/>\n",
+                "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
+                "fill=\"{}\"/>\n",
                 x - r * 0.85, y - r * 0.85, r * 1.7, r * 1.7, fill);
         case MarkerShape::Diamond:
             return fmt::format(
@@ -447,7 +481,8 @@ constexpr int kSuper = 3;
 
 class Canvas {
 public:
-    Canvas(uint32_t w, uint32_t h) : mW(int(w) * kSuper), mH(int(h) * kSuper), mRgb(size_t(mW) * mH * 3, 1.0f) {}
+    Canvas(uint32_t w, uint32_t h)
+        : mW(int(w) * kSuper), mH(int(h) * kSuper), mRgb(size_t(mW) * mH * 3, 1.0f) {}
 
     void blend(int x, int y, Color c, float a) {
         if (x < 0 || y < 0 || x >= mW || y >= mH || a <= 0) return;
@@ -466,13 +501,16 @@ public:
     void segment(double x0, double y0, double x1, double y1, double width, Color c) {
         x0 *= kSuper, y0 *= kSuper, x1 *= kSuper, y1 *= kSuper;
         double hw = std::max(width * kSuper * 0.5, 0.5);
-        int bx0 = int(std::floor(std::min(x0, x1) - hw - 1)), bx1 = int(std::ceil(std::max(x0, x1) + hw + 1));
-        int by0 = int(std::floor(std::min(y0, y1) - hw - 1)), by1 = int(std::ceil(std::max(y0, y1) + hw + 1));
+        int bx0 = int(std::floor(std::min(x0, x1) - hw - 1)),
+            bx1 = int(std::ceil(std::max(x0, x1) + hw + 1));
+        int by0 = int(std::floor(std::min(y0, y1) - hw - 1)),
+            by1 = int(std::ceil(std::max(y0, y1) + hw + 1));
         double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
         for (int y = std::max(by0, 0); y <= std::min(by1, mH - 1); ++y)
             for (int x = std::max(bx0, 0); x <= std::min(bx1, mW - 1); ++x) {
                 double cx = x + 0.5, cy = y + 0.5;
-                double t = len2 > 0 ? std::clamp(((cx - x0) * dx + (cy - y0) * dy) / len2, 0.0, 1.0) : 0.0;
+                double t =
+                    len2 > 0 ? std::clamp(((cx - x0) * dx + (cy - y0) * dy) / len2, 0.0, 1.0) : 0.0;
                 double ex = cx - (x0 + t * dx), ey = cy - (y0 + t * dy);
                 double d = std::sqrt(ex * ex + ey * ey);
                 blend(x, y, c, float(std::clamp(hw + 0.5 - d, 0.0, 1.0)));
@@ -485,9 +523,15 @@ public:
                 double dx = px + 0.5 - x, dy = py + 0.5 - y;
                 bool in = false;
                 switch (shape) {
-                    case MarkerShape::Circle: in = dx * dx + dy * dy <= r * r; break;
-                    case MarkerShape::Square: in = std::fabs(dx) <= r * 0.85 && std::fabs(dy) <= r * 0.85; break;
-                    case MarkerShape::Diamond: in = std::fabs(dx) + std::fabs(dy) <= r * 1.2; break;
+                    case MarkerShape::Circle:
+                        in = dx * dx + dy * dy <= r * r;
+                        break;
+                    case MarkerShape::Square:
+                        in = std::fabs(dx) <= r * 0.85 && std::fabs(dy) <= r * 0.85;
+                        break;
+                    case MarkerShape::Diamond:
+                        in = std::fabs(dx) + std::fabs(dy) <= r * 1.2;
+                        break;
                     case MarkerShape::Triangle:
                         // Apex (0, -1.2r), base y = +0.8r, half-width 1.1r.
                         in = dy <= r * 0.8 && dy >= -r * 1.2 &&
@@ -503,13 +547,12 @@ public:
         // Along-text offset of the first glyph relative to the anchor; text is centred on y.
         double start = anchor < 0 ? 0.0 : anchor == 0 ? -w / 2 : -w;
         for (size_t i = 0; i < s.size(); ++i) {
-            unsigned char ch = static_cast<unsigned char>(s[i]);
-            const uint8_t* glyph = kFont[(ch >= 32 && ch <= 126 ? ch : '?') - 32];
+            const uint16_t* columns = glyph(static_cast<unsigned char>(s[i]));
             for (int col = 0; col < 5; ++col)
-                for (int row = 0; row < kGlyphHeight; ++row) {
-                    if (!(glyph[col] >> row & 1)) continue;
+                for (int row = 0; row < kGlyphRows; ++row) {
+                    if (!(columns[col] >> row & 1)) continue;
                     double u = start + (double(i) * kGlyphAdvance + col) * scale;  // along text
-                    double v = -h / 2 + row * scale;                              // across text
+                    double v = -h / 2 + row * scale;                               // across text
                     if (!vertical)
                         fillRect(x + u, y + v, x + u + scale, y + v + scale, c);
                     else  // rotated 90 degrees counter-clockwise: reads bottom to top
@@ -552,10 +595,12 @@ std::string plotSvg(const PlotSpec& spec) {
                 auto [x0, y0] = it.points[0];
                 auto [x1, y1] = it.points[1];
                 s += fmt::format(
-                    "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"{}\"",
+                    "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
+                    "fill=\"{}\"",
                     x0, y0, x1 - x0, y1 - y0, it.filled ? it.fill.svg() : "none");
                 if (it.width > 0)
-                    s += fmt::format(" stroke=\"{}\" stroke-width=\"{}\"", it.color.svg(), it.width);
+                    s +=
+                        fmt::format(" stroke=\"{}\" stroke-width=\"{}\"", it.color.svg(), it.width);
                 s += "/>\n";
                 break;
             }
@@ -570,7 +615,9 @@ std::string plotSvg(const PlotSpec& spec) {
                 s += "\"/>\n";
                 break;
             }
-            case Item::Kind::Marker: s += markerSvg(it); break;
+            case Item::Kind::Marker:
+                s += markerSvg(it);
+                break;
             case Item::Kind::Text: {
                 auto [x, y] = it.points[0];
                 // The bitmap font's cell is 6x7 units per scale: a 10-unit monospace em matches.
@@ -578,8 +625,11 @@ std::string plotSvg(const PlotSpec& spec) {
                     "<text x=\"{:.2f}\" y=\"{:.2f}\" font-size=\"{:.1f}\" fill=\"{}\" "
                     "text-anchor=\"{}\" dominant-baseline=\"central\"{}>{}</text>\n",
                     x, y, 10.0 * it.width, it.color.svg(),
-                    it.anchor < 0 ? "start" : it.anchor == 0 ? "middle" : "end",
-                    it.vertical ? fmt::format(" transform=\"rotate(-90 {:.2f} {:.2f})\"", x, y) : "",
+                    it.anchor < 0    ? "start"
+                    : it.anchor == 0 ? "middle"
+                                     : "end",
+                    it.vertical ? fmt::format(" transform=\"rotate(-90 {:.2f} {:.2f})\"", x, y)
+                                : "",
                     xmlEscape(it.text));
                 break;
             }

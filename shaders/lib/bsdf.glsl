@@ -133,7 +133,8 @@ BsdfSample dielectric_sample(Material m, vec3 wo, float u, uint mode) {
     float F = fresnel_dielectric(w.z, eta, cos_t);
     BsdfSample s;
     if (u < F) {
-        s = bsdf_sample_make(bsdf_mirror(w), m.specular.rgb * F, F, BSDF_REFLECTION | BSDF_DELTA, 1.0);
+        s = bsdf_sample_make(bsdf_mirror(w), m.specular.rgb * F, F, BSDF_REFLECTION | BSDF_DELTA,
+                             1.0);
     } else {
         // Snell: tangential part scales by 1 / eta, cos_t < 0 from fresnel_dielectric.
         vec3 wi = vec3(-w.xy / eta, cos_t);

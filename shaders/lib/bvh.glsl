@@ -28,18 +28,20 @@ layout(std430) readonly buffer BvhTris { u64vec4 data[]; } bvh_tris;
 layout(std430) readonly buffer BvhTris { uvec4 data[]; } bvh_tris;
 #endif
 
-#ifdef BVH_ADJACENCY
-// Opt-in (define BVH_ADJACENCY before the include): a declared but unused buffer would still
-// be reflected and has to be bound. Per input triangle: the neighbour across edge (v0,v1),
-// (v1,v2), (v2,v0), -1 on a boundary.
+// Triangle adjacency for passes that walk meshes, per input triangle (prim): the neighbour
+// across edge (v0,v1), (v1,v2), (v2,v0), -1 on a boundary (scene::triangleAdjacency).
 layout(std430) readonly buffer BvhAdjacency { ivec4 data[]; } bvh_adjacency;
 ivec3 bvh_adjacent(uint prim) { return bvh_adjacency.data[prim].xyz; }
-#endif
 
 #define BVH_MASK_ALL 0xffu
 // The stack holds one node group per tree level at most; the builder bounds the depth
 // (kBvhMaxDepth). The top 8 entries live in registers, deeper ones spill to a local array.
 #define BVH_STACK_SIZE 32
+
+#ifdef BVH_STATS
+// Traversal statistics of the last query of this invocation (profiling only).
+uint bvh_stat_nodes = 0u, bvh_stat_tris = 0u;
+#endif
 
 struct Hit {
     float t;
@@ -112,7 +114,13 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     // Node group: x = first inner child; y = octant-ordered hit bits (24..31) | offset of each
     // slot's inner child from x (3 bits per slot).
     uvec2 ngroup = uvec2(0u, 0x80000000u);
+#ifdef BVH_STATS
+    bvh_stat_nodes = 0u, bvh_stat_tris = 0u;
+#endif
     while (true) {
+#ifdef BVH_STATS
+        bvh_stat_nodes++;
+#endif
         // Next child of the group, nearest first; push the rest.
         uint bit = uint(findMSB(ngroup.y));
         uint slot = (bit - 24u) ^ oct_inv;
@@ -159,6 +167,9 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         while (tri_hits != 0u) {
             uint k = uint(findLSB(tri_hits));
             tri_hits &= tri_hits - 1u;
+#ifdef BVH_STATS
+            bvh_stat_tris++;
+#endif
             uint index = w1.y + uint(bitCount(leaf_bits & ((1u << k) - 1u)));
             if (bvh_intersect_triangle(index, o, d, tmin, hit.t, mask, hit)) {
                 found = true;

@@ -15,7 +15,10 @@ layout(std430) readonly buffer SceneEnvMaps { float envmap_data[]; };
 uint envmap_u32(uint i) { return floatBitsToUint(envmap_data[i]); }
 uint envmap_count() { return envmap_u32(0u); }
 uint envmap_record(uint index) { return envmap_u32(1u + index); }
-uvec2 envmap_size(uint index) { return uvec2(envmap_u32(envmap_record(index)), envmap_u32(envmap_record(index) + 1u)); }
+uvec2 envmap_size(uint index) {
+    uint record = envmap_record(index);
+    return uvec2(envmap_u32(record), envmap_u32(record + 1u));
+}
 
 // Three vec3 columns, each padded to 4 floats.
 mat3 envmap_matrix(uint at) {
@@ -31,15 +34,30 @@ vec3 envmap_direction(vec2 uv) {
 }
 
 vec2 envmap_uv(vec3 d) {
-    // atan(0, 0) is undefined in GLSL: the poles get u = 0.
+    // atan(0, 0) is undefined in GLSL: the poles get u = 0. theta via atan (not acos, which is
+    // far less accurate on some drivers).
     float u = (d.x == 0.0 && d.z == 0.0) ? 0.0 : atan(d.x, -d.z) * (0.5 * INV_PI);
     u = u < 0.0 ? u + 1.0 : u;
-    return vec2(u >= 1.0 ? 0.0 : u, acos(clamp(d.y, -1.0, 1.0)) * INV_PI);
+    return vec2(u >= 1.0 ? 0.0 : u, atan(length(d.xz), d.y) * INV_PI);
 }
 
-// Texel containing uv (nearest filtering, matching the piecewise-constant pdf).
-uvec2 envmap_texel(uvec2 size, vec2 uv) {
-    return min(uvec2(uv * vec2(size)), size - 1u);
+// Texel containing the local direction d (nearest filtering, matching the piecewise-constant
+// pdf). GPU inverse trigonometry is loose (Vulkan allows 4096 ulp for atan; lavapipe's acos is
+// off by ~1e-4), so the estimate from envmap_uv is snapped against the texel edges as the
+// forward map envmap_direction places them (cos/sin), keeping envmap_pdf(envmap_sample(u)) and
+// envmap_eval consistent with the texel that was sampled.
+uvec2 envmap_texel(uvec2 size, vec3 d) {
+    uvec2 t = min(uvec2(envmap_uv(d) * vec2(size)), size - 1u);
+    // Row j holds cos(theta) in (cos(pi (j + 1) / H), cos(pi j / H)].
+    if (t.y > 0u && d.y > cos(PI * (float(t.y) / float(size.y)))) t.y--;
+    else if (t.y + 1u < size.y && d.y <= cos(PI * (float(t.y + 1u) / float(size.y)))) t.y++;
+    // Column i holds phi in [phi_i, phi_i+1); sin(phi - phi_i) has the sign of
+    // d.x cos(phi_i) + d.z sin(phi_i).
+    float p0 = 2.0 * PI * (float(t.x) / float(size.x));
+    float p1 = 2.0 * PI * (float(t.x + 1u) / float(size.x));
+    if (d.x * cos(p0) + d.z * sin(p0) < 0.0) t.x = (t.x + size.x - 1u) % size.x;
+    else if (d.x * cos(p1) + d.z * sin(p1) >= 0.0) t.x = (t.x + 1u) % size.x;
+    return t;
 }
 
 // Largest i in [0, n) with cdf[i] <= u for the n + 1 CDF values at `offset`
@@ -65,8 +83,7 @@ float envmap_texel_pdf(uint record, uvec2 size, uvec2 t) {
 float envmap_pdf_local(uint record, uvec2 size, vec3 d) {
     float sin_theta = length(d.xz);
     if (sin_theta <= 0.0) return 0.0;
-    return envmap_texel_pdf(record, size, envmap_texel(size, envmap_uv(d))) /
-           (2.0 * PI * PI * sin_theta);
+    return envmap_texel_pdf(record, size, envmap_texel(size, d)) / (2.0 * PI * PI * sin_theta);
 }
 
 // Solid-angle pdf of envmap_sample for a world direction.
@@ -80,7 +97,7 @@ float envmap_pdf(uint index, vec3 wi) {
 vec3 envmap_eval(uint index, vec3 wi) {
     uint record = envmap_record(index);
     uvec2 size = envmap_size(index);
-    uvec2 t = envmap_texel(size, envmap_uv(normalize(envmap_matrix(record + 16u) * wi)));
+    uvec2 t = envmap_texel(size, normalize(envmap_matrix(record + 16u) * wi));
     uint at = record + envmap_u32(record + 2u) + 3u * (t.y * size.x + t.x);
     return vec3(envmap_data[at], envmap_data[at + 1u], envmap_data[at + 2u]);
 }
@@ -102,9 +119,10 @@ vec3 envmap_sample(uint index, vec2 u, out float pdf) {
     float du = clamp((u.x - d0) / (d1 - d0), 0.0, 1.0);
     vec2 uv = (vec2(i, j) + vec2(du, dv)) / vec2(size);
     vec3 d = envmap_direction(uv);
-    float sin_theta = sin(PI * uv.y);
-    pdf = sin_theta > 0.0 ? envmap_texel_pdf(record, size, uvec2(i, j)) / (2.0 * PI * PI * sin_theta)
-                          : 0.0;
+    // Same sin(theta) expression as envmap_pdf_local: pdf(sample) == envmap_pdf(direction).
+    float sin_theta = length(d.xz);
+    float pdf_uv = envmap_texel_pdf(record, size, uvec2(i, j));
+    pdf = sin_theta > 0.0 ? pdf_uv / (2.0 * PI * PI * sin_theta) : 0.0;
     return normalize(envmap_matrix(record + 4u) * d);
 }
 

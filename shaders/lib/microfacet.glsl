@@ -37,8 +37,8 @@ float microfacet_d(uint dist, float alpha, vec3 m) {
 // Complementary error function, Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7), x >= 0.
 float microfacet_erfc(float x) {
     float t = 1.0 / (1.0 + 0.3275911 * x);
-    float poly =
-        t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    float poly = t * (0.254829592 +
+                      t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
     return poly * exp(-x * x);
 }
 
@@ -87,7 +87,7 @@ vec3 microfacet_sample_ggx_vndf(float alpha, vec3 wo, vec2 u) {
     p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
     // Reproject onto the hemisphere, then unstretch.
     vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
-    return normalize(vec3(alpha * nh.x, alpha * nh.y, max(1e-6, nh.z)));
+    return normalize(vec3(alpha * nh.x, alpha * nh.y, max(0.0, nh.z)));
 }
 
 // Walter 2007 Eq. 28: Beckmann normals with density D(m) cos(theta_m).

@@ -1,7 +1,9 @@
 #version 460
 // Traces a buffer of rays through lib/bvh.glsl (tests/gpu/test_bvh.cpp, bench/bench_bvh.cpp).
 // Ray i = (origin, tmin), (direction, tmax); result i = (t, prim, u, v) for closest hit
-// (prim = ~0u on a miss) or (occluded, 0, 0, 0) for any hit.
+// (prim = ~0u on a miss) or (occluded, 0, 0, 0) for any hit. With BVH_STATS defined, z and w
+// of a closest-hit result are the nodes and triangles visited; with BVH_ADJACENCY, xyz of
+// result i are the neighbours of triangle i instead.
 #include "lib/bvh.glsl"
 
 layout(local_size_x = 64) in;
@@ -35,5 +37,11 @@ void main() {
         results.data[i] = found ? uvec4(floatBitsToUint(hit.t), hit.prim,
                                         floatBitsToUint(hit.bary))
                                 : uvec4(floatBitsToUint(b.w), 0xffffffffu, 0u, 0u);
+#ifdef BVH_STATS
+        results.data[i].zw = uvec2(bvh_stat_nodes, bvh_stat_tris);  // instead of (u, v)
+#endif
     }
+#ifdef BVH_ADJACENCY
+    results.data[i].xyz = uvec3(bvh_adjacent(i));
+#endif
 }

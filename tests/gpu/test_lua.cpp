@@ -196,8 +196,9 @@ assert(r:image("tm.output"):width() == 8)
 // Errors that end the script: exit 2, script:line, traceback
 
 TEST_F(LuaApi, RuntimeErrorReportsLineAndTraceback) {
-    int rc = run("local x = 1\nlocal r = loom.renderer{graph = 'graphs/pt.json', width = 8, "
-                 "height = 8}\nr:set('pt.nope', 1)\n");
+    int rc =
+        run("local x = 1\nlocal r = loom.renderer{graph = 'graphs/pt.json', width = 8, "
+            "height = 8}\nr:set('pt.nope', 1)\n");
     EXPECT_EQ(rc, 2);
     EXPECT_NE(error.find("test:3: r:set('pt.nope'): PathTracer 'pt' has no parameter 'nope'"),
               std::string::npos)
@@ -459,7 +460,8 @@ expect_error(function() loom.plot{path = TMP .. "/p", series = {}, colour = 1} e
     ASSERT_EQ(rc, 0) << error;
     std::string svg = readFile(tmp / "plots/err.svg");
     EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-    for (const char* s : {"Error vs time", "GPU time (ms)", "relMSE", ">mis<", ">bsdf<", "polyline"})
+    for (const char* s :
+         {"Error vs time", "GPU time (ms)", "relMSE", ">mis<", ">bsdf<", "polyline"})
         EXPECT_NE(svg.find(s), std::string::npos) << s;
     // The PNG is not blank: it has the white background, dark text and coloured lines.
     ImageData png = readImage(tmp / "plots/err.png");
@@ -479,7 +481,8 @@ expect_error(function() loom.plot{path = TMP .. "/p", series = {}, colour = 1} e
 // Arguments, progress, sweeps
 
 TEST_F(LuaApi, ScriptArguments) {
-    int rc = run(kExpectError + R"lua(
+    int rc = run(
+        kExpectError + R"lua(
 assert(loom.args[1] == "width=16" and loom.args.width == "16" and loom.args[7] == "pos")
 assert(loom.arg("width", 8) == 16 and math.type(loom.arg("width", 8)) == "integer")
 assert(loom.arg("frames", 1) == 3)
@@ -495,8 +498,7 @@ expect_error(function() return loom.arg("scale", 1) end, "expects an integer")
 expect_error(function() return loom.arg("name", true) end, "expects a boolean")
 assert(loom.shard.index == 0 and loom.shard.count == 1)
 )lua",
-                 {"width=16", "--frames", "3", "--scale=0.5", "--flag", "name=abc", "pos",
-                  "values=1,2,4"});
+        {"width=16", "--frames", "3", "--scale=0.5", "--flag", "name=abc", "pos", "values=1,2,4"});
     EXPECT_EQ(rc, 0) << error;
 }
 
@@ -604,7 +606,9 @@ CommandResult runLoom(const std::string& args, const TempDir& cwd) {
     return r;
 }
 
-std::string script(const std::string& name) { return "'" + kSource + "/scripts/" + name + "'"; }
+std::string script(const std::string& name) {
+    return "'" + kSource + "/scripts/" + name + "'";
+}
 
 TEST(LoomRun, HelpUsageAndErrors) {
     TempDir tmp("loom-run");
@@ -653,15 +657,16 @@ TEST(LoomRun, HelpUsageAndErrors) {
 
 TEST(LoomRun, CaptureScript) {
     TempDir tmp("loom-run");
-    auto r = runLoom("run " + script("capture.lua") +
-                      " width=16 height=16 frames=2 out=cap pt.samplesPerPixel=2 tm.operator=clamp",
-                  tmp);
+    auto r =
+        runLoom("run " + script("capture.lua") +
+                    " width=16 height=16 frames=2 out=cap pt.samplesPerPixel=2 tm.operator=clamp",
+                tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(fs::exists(tmp / "cap/tm_output.png")) << r.out;
     EXPECT_TRUE(fs::exists(tmp / "cap/accum_output.exr")) << r.out;
     r = runLoom("run " + script("capture.lua") +
-                 " graph=graphs/hello_compute.json scene= width=16 height=16 frames=2 out=hc",
-             tmp);
+                    " graph=graphs/hello_compute.json scene= width=16 height=16 frames=2 out=hc",
+                tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(fs::exists(tmp / "hc/tm_output.png"));
     r = runLoom("run " + script("capture.lua") + " width=16 height=16 frames=1 pt.nope=1", tmp);
@@ -671,8 +676,8 @@ TEST(LoomRun, CaptureScript) {
 
 TEST(LoomRun, ReferenceScript) {
     TempDir tmp("loom-run");
-    auto r = runLoom("run " + script("reference.lua") + " width=16 height=16 frames=2 spp=4 out=ref.exr",
-                  tmp);
+    auto r = runLoom(
+        "run " + script("reference.lua") + " width=16 height=16 frames=2 spp=4 out=ref.exr", tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     ImageData ref = readImage(tmp / "ref.exr");
     EXPECT_EQ(ref.width, 16u);
@@ -683,8 +688,8 @@ TEST(LoomRun, ReferenceScript) {
 TEST(LoomRun, EqualTimeScript) {
     TempDir tmp("loom-run");
     auto r = runLoom("run " + script("equal_time.lua") +
-                      " width=16 height=16 budget_ms=8 steps=3 ref_frames=2 ref_spp=8 out=et",
-                  tmp);
+                         " width=16 height=16 budget_ms=8 steps=3 ref_frames=2 ref_spp=8 out=et",
+                     tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     for (const char* s : {"mis 1spp", "mis 4spp", "bsdf 1spp", "relMSE", "MAPE"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
@@ -700,8 +705,9 @@ TEST(LoomRun, EqualTimeScript) {
 
 TEST(LoomRun, AblationShardsMergeToTheUnshardedRun) {
     TempDir tmp("loom-run");
-    std::string common = " width=16 height=16 frames=2 values=1,2,3,5,9 ref_frames=2 ref_spp=4"
-                         " reference=ref.exr";
+    std::string common =
+        " width=16 height=16 frames=2 values=1,2,3,5,9 ref_frames=2 ref_spp=4"
+        " reference=ref.exr";
     auto r = runLoom("run " + script("ablation.lua") + common + " out=all", tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("pt.maxBounces"), std::string::npos) << r.out;
@@ -711,10 +717,11 @@ TEST(LoomRun, AblationShardsMergeToTheUnshardedRun) {
     for (int i = 0; i < 3; ++i) {
         std::string shard = std::to_string(i) + "/3";
         r = runLoom("run " + script("ablation.lua") + " --shard " + shard + common + " out=part" +
-                     std::to_string(i),
-                 tmp);
+                        std::to_string(i),
+                    tmp);
         ASSERT_EQ(r.exitCode, 0) << shard << "\n" << r.err;
-        script::CsvTable part = script::readCsv(tmp / ("part" + std::to_string(i) + "/ablation.csv"));
+        script::CsvTable part =
+            script::readCsv(tmp / ("part" + std::to_string(i) + "/ablation.csv"));
         for (auto& row : part.rows) EXPECT_TRUE(seen.insert(row[0]).second) << "disjoint";
         parts += " part" + std::to_string(i) + "/ablation.csv";
     }
@@ -728,11 +735,11 @@ TEST(LoomRun, AblationShardsMergeToTheUnshardedRun) {
 
 TEST(LoomRun, TurntableScript) {
     TempDir tmp("loom-run");
-    auto r = runLoom("run " + script("turntable.lua") + " width=16 height=16 views=3 frames=1 out=tt",
-                  tmp);
+    auto r = runLoom(
+        "run " + script("turntable.lua") + " width=16 height=16 views=3 frames=1 out=tt", tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    for (const char* f : {"tt/path.json", "tt/frame_0000.png", "tt/frame_0001.png",
-                          "tt/frame_0002.png"})
+    for (const char* f :
+         {"tt/path.json", "tt/frame_0000.png", "tt/frame_0001.png", "tt/frame_0002.png"})
         EXPECT_TRUE(fs::exists(tmp / f)) << f;
     // The views differ: the camera moved.
     ImageData a = readImage(tmp / "tt/frame_0000.png"), b = readImage(tmp / "tt/frame_0002.png");
