@@ -6,8 +6,7 @@ cd "$(dirname "$0")/.."
 bash tools/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build
-GRAPH=${1:-graphs/hello_compute.json}
-shift || true
-./build/apps/loom render "$GRAPH" --width 320 --height 240 --frames 64 --out out/first.exr \
-  --output tm.output=out/first.png "$@"
-echo "loom: images are in $(pwd)/out/ (first.png for viewing, first.exr linear HDR)"
+# The Cornell box through the reference path tracer (graphs/pt.json), 64 frames of 1 spp.
+./build/apps/loom render graphs/pt.json --scene scenes/cornell_box.json --width 256 --height 256 \
+  --frames 64 --output accum.output=out/cornell_box.exr --output tm.output=out/cornell_box.png "$@"
+echo "loom: images are in $(pwd)/out/ (cornell_box.png for viewing, cornell_box.exr linear HDR)"
