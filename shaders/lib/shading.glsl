@@ -30,6 +30,8 @@ ShadingPoint shading_point(Hit hit) {
     s.mat = scene_materials[shape.material];
     uint tex = material_reflectance_texture(s.mat);
     if (tex != MATERIAL_NO_TEXTURE) s.mat.diffuse.rgb = texture_fetch(tex, s.sp.uv).rgb;
+    uint spec_tex = material_specular_texture(s.mat);
+    if (spec_tex != MATERIAL_NO_TEXTURE) s.mat.specular.rgb = texture_fetch(spec_tex, s.sp.uv).rgb;
     s.n = s.sp.ns;
     // Tangent frame from dp/du, Gram-Schmidt against the shading normal.
     vec3 t = s.sp.dpdu - s.n * dot(s.n, s.sp.dpdu);
