@@ -211,9 +211,9 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
         masks[i] = triMask[i];
     }
 
-    // Build primitives: one box per triangle; spatial splits need spare capacity.
+    // Build primitives: one box per triangle, plus spare capacity that Embree fills with
+    // spatial-split references while there is room.
     std::vector<RTCBuildPrimitive> prims;
-    // Spatial splits need spare capacity; Embree splits while there is room.
     prims.reserve(options.spatialSplits ? triangles.size() * 3 / 2 : triangles.size());
     glm::vec3 sceneLo(INFINITY), sceneHi(-INFINITY);
     for (uint32_t t = 0; t < triangles.size(); ++t) {

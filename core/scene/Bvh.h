@@ -3,8 +3,9 @@
 // high quality = spatial splits) builds an 8-wide tree stored in a variant of the compressed
 // wide BVH of Ylitie, Karras and Laine 2017, "Efficient Incoherent Ray Traversal on GPUs
 // Through Compressed Wide BVHs": 8-bit quantised child boxes, child slots ordered by ray
-// octant. On lavapipe a divergent load is a per-lane loop costing about as much as a
-// hundred ALU operations, so the layout minimises load instructions per ray.
+// octant. On lavapipe a divergent buffer load is a per-lane loop costing about as much as a
+// hundred ALU operations, so the layout minimises load instructions per ray (measurements in
+// the header of bvh.glsl and in bench/bench_bvh.cpp).
 #include <glm/glm.hpp>
 
 #include <cstdint>
@@ -21,8 +22,8 @@ class Context;
 namespace loom::scene {
 
 // One node = 80 bytes = 5 RGBA32UI texels of the node image (texel i at (i % 8192, i / 8192)).
-// On lavapipe an image load is a branch-free gather while a buffer load is a per-lane loop,
-// so node fetches go through the image. 32-bit words:
+// On lavapipe an image load is a branch-free 16-byte load per lane while a buffer load is a
+// per-lane loop with branches, so node fetches go through the image. 32-bit words:
 //  0-2  origin xyz (float bits)     3  exponent x | y << 8 | z << 16 | imask << 24
 //  4    index of the first internal child node (internal children are consecutive, in slot
 //       order; imask bit s = slot s holds an internal child)
@@ -52,7 +53,7 @@ constexpr uint32_t kBvhNodeImageWidth = 8192;
 
 // A world-space triangle as the traversal reads it (64 bytes: two 32-byte buffer loads, one
 // cache line): Möller–Trumbore with precomputed edges and normal, the caller's primitive id
-// and mask.
+// and mask. lavapipe binds at most 128 MB per storage buffer: about 2M triangle references.
 struct BvhTriangle {
     glm::vec3 v0;
     uint32_t prim;  // index into the input triangle list
@@ -67,7 +68,7 @@ static_assert(sizeof(BvhTriangle) == 64);
 
 struct BvhBuildOptions {
     bool spatialSplits = true;  // RTC_BUILD_QUALITY_HIGH (SBVH); false: plain binned SAH
-    uint32_t maxLeafSize = 3;   // 1..3 (the node meta stores counts in 3 unary bits)
+    uint32_t maxLeafSize = 3;   // 1..3 (a leaf slot owns 3 triangle bits in the node)
 };
 
 struct BvhStats {

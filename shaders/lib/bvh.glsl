@@ -6,11 +6,13 @@
 // origins themselves (no self-intersection tricks here).
 //
 // Cost model on lavapipe (llvmpipe, SIMD batches of 8 invocations), measured: a buffer load
-// with divergent addresses is a per-lane loop (~35 ns per load instruction, any width up to
-// 32 bytes), an image load is a branch-free gather (cheaper when all lanes are active, as in
-// node fetches), a dynamically indexed local array is a scatter/gather loop, ALU ~0.4 ns per
-// operation. Hence nodes in an image, triangles as 32-byte buffer loads, a register stack and
-// few ALU operations per child. Define BVH_NO_INT64 for devices without shaderInt64.
+// with divergent addresses is a per-lane loop with a branch per lane and component (~35 ns
+// per load instruction, any width up to 32 bytes, nearly as much when few lanes are active);
+// an image load is one unrolled, branch-free 16-byte load per lane (cheaper when most lanes
+// are active, as in node fetches); a dynamically indexed local array is a scatter/gather
+// loop; ALU ~0.4 ns per operation. Hence nodes in an image, triangles as 32-byte buffer loads
+// (sparse lanes in the triangle loop), a register stack and few ALU operations per child.
+// Define BVH_NO_INT64 for devices without shaderInt64 (16-byte loads, identical results).
 #ifndef LOOM_BVH_GLSL
 #define LOOM_BVH_GLSL
 #ifndef BVH_NO_INT64
@@ -190,10 +192,13 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     return found;
 }
 
+// Nearest hit with t in (tmin, tmax] among triangles whose mask shares a bit with `mask`
+// (BVH_MASK_ALL: every triangle). On a miss returns false, hit.t = tmax, hit.prim = ~0u.
 bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, uint mask, out Hit hit) {
     return bvh_traverse(o, d, tmin, tmax, mask, false, hit);
 }
 
+// Whether any such hit exists (shadow rays); stops at the first one found.
 bool trace_any(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     Hit hit;
     return bvh_traverse(o, d, tmin, tmax, mask, true, hit);
