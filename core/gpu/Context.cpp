@@ -392,6 +392,9 @@ std::shared_ptr<Context> Context::create(const Options& options) {
 
 void Context::init(const Options& options) {
     bool validation = options.validation;
+#ifndef NDEBUG
+    validation = true;  // debug builds: validation layers whenever they are installed
+#endif
     if (const char* v = std::getenv("LOOM_VALIDATION"); v && std::string(v) == "1")
         validation = true;
     bool validationOn = false;
