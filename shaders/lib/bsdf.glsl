@@ -352,6 +352,18 @@ bool bsdf_flip_to_front(Material m, vec3 wo) {
     return wo.z < 0.0 && bsdf_is_opaque(material_type(m)) && material_two_sided(m);
 }
 
+// Rough dielectric from either side: mirror a below-surface configuration to the front; the
+// IOR ratio inverts.
+void rough_dielectric_eval_pdf_any_side(Material m, vec3 wo, vec3 wi, uint mode, out vec3 f,
+                                        out float pdf) {
+    float eta = wo.z < 0.0 ? 1.0 / material_eta(m) : material_eta(m);
+    if (wo.z < 0.0) {
+        wo.z = -wo.z;
+        wi.z = -wi.z;
+    }
+    rough_dielectric_eval_pdf(m, wo, wi, eta, mode, f, pdf);
+}
+
 vec3 bsdf_eval(Material m, vec3 wo, vec3 wi, uint mode) {
     if (bsdf_flip_to_front(m, wo)) {
         wo.z = -wo.z;
@@ -363,15 +375,9 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi, uint mode) {
     if (t == MATERIAL_PLASTIC) return plastic_eval(m, wo, wi, false);
     if (t == MATERIAL_ROUGH_PLASTIC) return plastic_eval(m, wo, wi, true);
     if (t == MATERIAL_ROUGH_DIELECTRIC) {
-        // Mirror a below-surface configuration to the front; the IOR ratio inverts.
-        float eta = wo.z < 0.0 ? 1.0 / material_eta(m) : material_eta(m);
-        if (wo.z < 0.0) {
-            wo.z = -wo.z;
-            wi.z = -wi.z;
-        }
         vec3 f;
         float pdf;
-        rough_dielectric_eval_pdf(m, wo, wi, eta, mode, f, pdf);
+        rough_dielectric_eval_pdf_any_side(m, wo, wi, mode, f, pdf);
         return f;
     }
     return vec3(0.0);  // delta-only materials
@@ -390,14 +396,9 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
     if (t == MATERIAL_PLASTIC) return plastic_pdf(m, wo, wi, false);
     if (t == MATERIAL_ROUGH_PLASTIC) return plastic_pdf(m, wo, wi, true);
     if (t == MATERIAL_ROUGH_DIELECTRIC) {
-        float eta = wo.z < 0.0 ? 1.0 / material_eta(m) : material_eta(m);
-        if (wo.z < 0.0) {
-            wo.z = -wo.z;
-            wi.z = -wi.z;
-        }
         vec3 f;
         float pdf;
-        rough_dielectric_eval_pdf(m, wo, wi, eta, TRANSPORT_RADIANCE, f, pdf);
+        rough_dielectric_eval_pdf_any_side(m, wo, wi, TRANSPORT_RADIANCE, f, pdf);
         return pdf;
     }
     return 0.0;
