@@ -4,6 +4,8 @@
 // rotated map packed into the same buffer.
 #include <gtest/gtest.h>
 
+#include "tests/support/Chi2.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -126,67 +128,9 @@ private:
 };
 
 // ---------------------------------------------------------------------------------------------
-// Chi-square helpers (same procedure as tests/gpu/test_bsdf.cpp, pbrt-v3 chi2test).
-
-double gammaQ(double a, double x) {
-    if (x <= 0.0) return 1.0;
-    const double lg = std::lgamma(a);
-    if (x < a + 1.0) {
-        double sum = 1.0 / a, term = sum;
-        for (int n = 1; n < 100000 && std::abs(term) > std::abs(sum) * 1e-15; ++n) {
-            term *= x / (a + n);
-            sum += term;
-        }
-        return 1.0 - sum * std::exp(-x + a * std::log(x) - lg);
-    }
-    double b = x + 1.0 - a, c = 1e300, d = 1.0 / b, h = d;
-    for (int i = 1; i < 100000; ++i) {
-        const double an = -i * (i - a);
-        b += 2.0;
-        d = an * d + b;
-        d = std::abs(d) < 1e-300 ? 1e-300 : d;
-        c = b + an / c;
-        c = std::abs(c) < 1e-300 ? 1e-300 : c;
-        d = 1.0 / d;
-        h *= d * c;
-        if (std::abs(d * c - 1.0) < 1e-15) break;
-    }
-    return std::exp(-x + a * std::log(x) - lg) * h;
-}
-
-struct Chi2Result {
-    double statistic = 0.0, pValue = 0.0;
-    int dof = 0;
-    double stray = 0.0;  // samples in cells of expected frequency 0
-};
-
-// Cells sorted by expectation, those below 5 pooled.
-Chi2Result chi2(const std::vector<double>& observed, const std::vector<double>& expected) {
-    std::vector<size_t> order(observed.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](size_t a, size_t b) { return expected[a] < expected[b]; });
-    Chi2Result r;
-    double pooledObs = 0.0, pooledExp = 0.0;
-    for (size_t i : order) {
-        if (expected[i] <= 0.0) {
-            r.stray += observed[i];
-        } else if (expected[i] < 5.0 || (pooledExp > 0.0 && pooledExp < 5.0)) {
-            pooledObs += observed[i];
-            pooledExp += expected[i];
-        } else {
-            r.statistic += (observed[i] - expected[i]) * (observed[i] - expected[i]) / expected[i];
-            ++r.dof;
-        }
-    }
-    if (pooledExp > 0.0) {
-        r.statistic += (pooledObs - pooledExp) * (pooledObs - pooledExp) / pooledExp;
-        ++r.dof;
-    }
-    r.dof -= 1;
-    r.pValue = r.dof > 0 ? gammaQ(0.5 * r.dof, 0.5 * r.statistic) : 1.0;
-    return r;
-}
+// Chi-square helpers: tests/support/Chi2.h.
+using loom::test::Chi2Result;
+using loom::test::chi2;
 
 // ---------------------------------------------------------------------------------------------
 
