@@ -2,8 +2,11 @@
 // rtcIntersect1/rtcOccluded1 on the same CPU and the same rays: coherent primary rays from a
 // pinhole camera and incoherent diffuse bounces. Prints Mrays/s and the ratio.
 //   bench_bvh [--width W] [--height H] [--reps N] [--detail N] [--spheres N] [--embree 0|1]
+//             [--leaf 1..3] [--icost C]   (BvhBuildOptions: maxLeafSize, SAH intersectionCost)
 //             [--define NAME=VALUE]...   (shader variants of lib/bvh.glsl; BVH_STATS prints
 //             nodes and triangles visited per ray)
+//             [--variant NAME=VALUE[,NAME=VALUE]]...  (more kernels, timed interleaved with the
+//             base one in the same process: A/B comparisons on a shared machine)
 // Rays per CPU-second is the measure to compare on a shared machine; wall-clock rates depend
 // on what else runs. Measured on the 2-vCPU dev VM (AMD EPYC, Mesa 22.3 lavapipe, Embree
 // 3.13), default scene (661k triangles), 1024x768, quiet moment:
@@ -11,6 +14,22 @@
 //   primary    6.95 Mrays/s               8.81       17.5        0.52
 //   diffuse    3.63                       4.81       9.83        0.46
 //   shadow     7.25                       7.80       15.4        0.54
+// Re-measured (same VM, traversal unchanged, other builds running): per CPU-s primary 4.57 vs
+// 8.98 (0.51), diffuse 1.93-2.31 vs 4.38-4.90 (0.44-0.54 across runs), shadow 4.11 vs 7.81
+// (0.53); the diffuse ratio varies by +-0.05 from run to run under load.
+// Variants tried with --variant (interleaved, same process; per CPU-s, diffuse rays):
+//   triangles in an RGBA32UI image instead of the buffer       -14% (primary -5%)
+//   postponed triangle tests until half (or 1/4, 3/4) of the   -13% (-5%, -18%); every set
+//     subgroup has some (Ylitie et al. 2017 Sec. 4)              slower
+//   geometric normal from cross(e1, e2) (6 instead of 8 loads)  -1% (noise)
+//   separate "touch" load of each triangle before its test      -30%
+//   workgroup 32 or 256 instead of 64                           +-1.5% (noise)
+//   LP_NATIVE_VECTOR_WIDTH=128 (SIMD-4)                          same rays per CPU-s
+//   maxLeafSize 2, SAH intersectionCost 0.5 or 2 (--leaf/--icost) within noise
+// BVH_STATS (diffuse): 10.1 nodes and 3.5 triangles per ray, but SIMD-8 batches run 17.4 node
+// and 14.1 triangle-loop iterations; yet halving SIMD width changes nothing and perf puts ~21%
+// of the kernel on the first load of a triangle (cache misses), so per-lane loads, not lane
+// utilisation, bound the traversal on lavapipe.
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -208,6 +227,7 @@ Timing embreeTrace(RTCScene scene, const std::vector<Ray>& rays, bool occlusion,
 struct GpuTracer {
     std::shared_ptr<gpu::Context> gpu;
     std::shared_ptr<gpu::ComputePipeline> pipeline;
+    std::vector<std::shared_ptr<gpu::ComputePipeline>> variants;  // --variant kernels
     scene::BvhGpu bvh;
 
     std::shared_ptr<gpu::Buffer> rayBuf, results;
@@ -222,16 +242,19 @@ struct GpuTracer {
         rayCount = uint32_t(rays.size());
         anyHit = any;
         run();  // warm-up: lavapipe compiles the kernel on first use
+        for (size_t v = 0; v < variants.size(); ++v) run(int(v));
     }
 
-    Timing run() {
+    // variant -1: the base kernel, else --variant number `variant`.
+    Timing run(int variant = -1) {
+        const gpu::ComputePipeline& p = variant < 0 ? *pipeline : *variants[size_t(variant)];
         gpu::Bindings b;
         bvh.bind(b);
         b.set("rays", rayBuf).set("results", results);
-        gpu::PushConstants pc(*pipeline);
+        gpu::PushConstants pc(p);
         pc.set("rayCount", rayCount).set("mask", 0xffu).set("anyHit", uint32_t(anyHit));
         auto cmd = gpu->beginCommands();
-        cmd->dispatchThreads(*pipeline, b, &pc, rayCount);
+        cmd->dispatchThreads(p, b, &pc, rayCount);
         const auto w0 = Clock::now();
         const double c0 = processCpuSeconds();
         gpu->submit(*cmd);
@@ -245,18 +268,20 @@ struct GpuTracer {
         out.resize(rayCount);
         for (size_t i = 0; i < rayCount; ++i) out[i] = anyHit ? hits[i].x : hits[i].y;
         if (stats && !anyHit) {  // BVH_STATS kernel: nodes, triangles per ray
-            double n = 0, t = 0, n8 = 0, t8 = 0;
+            double n = 0, t = 0, n8 = 0, t8 = 0, ti = 0;
             for (size_t i = 0; i < rayCount; i += 8) {
-                uint32_t mn = 0, mt = 0;
+                uint32_t mn = 0, mt = 0, mi = 0;
                 for (size_t k = i; k < std::min<size_t>(i + 8, rayCount); ++k) {
                     n += hits[k].z, t += hits[k].w;
                     mn = std::max(mn, hits[k].z), mt = std::max(mt, hits[k].w);
+                    mi = std::max(mi, hits[k].x);
                 }
-                n8 += 8.0 * mn, t8 += 8.0 * mt;
+                n8 += 8.0 * mn, t8 += 8.0 * mt, ti += 8.0 * mi;
             }
             std::printf(
-                "  per ray: %.1f nodes, %.1f triangles; SIMD-8 max: %.1f nodes, %.1f tris\n",
-                n / rayCount, t / rayCount, n8 / rayCount, t8 / rayCount);
+                "  per ray: %.1f nodes, %.1f triangles; SIMD-8 max: %.1f nodes, %.1f "
+                "tris; triangle loop iterations %.1f\n",
+                n / rayCount, t / rayCount, n8 / rayCount, t8 / rayCount, ti / rayCount);
         }
     }
 };
@@ -266,7 +291,9 @@ int main(int argc, char** argv) {
     uint32_t width = 1024, height = 768, detail = 300, spheres = 80;
     int reps = 3;
     bool embreeRuns = true;
+    scene::BvhBuildOptions buildOptions;
     ShaderDefines defines;
+    std::vector<std::string> variantArgs;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i];
         const uint32_t v = uint32_t(std::atoi(argv[i + 1]));
@@ -280,12 +307,18 @@ int main(int argc, char** argv) {
             detail = v;
         else if (a == "--spheres")
             spheres = v;
+        else if (a == "--leaf")
+            buildOptions.maxLeafSize = v;
+        else if (a == "--icost")
+            buildOptions.intersectionCost = float(std::atof(argv[i + 1]));
         else if (a == "--embree")
             embreeRuns = v != 0;
         else if (a == "--define") {  // NAME=VALUE, a shader variant to compare
             const std::string d = argv[i + 1];
             const size_t eq = d.find('=');
             defines[d.substr(0, eq)] = eq == std::string::npos ? "1" : d.substr(eq + 1);
+        } else if (a == "--variant") {  // NAME=VALUE[,NAME=VALUE...] on top of --define
+            variantArgs.push_back(argv[i + 1]);
         } else {
             std::fprintf(stderr, "unknown option %s\n", argv[i]);
             return 2;
@@ -293,7 +326,7 @@ int main(int argc, char** argv) {
     }
 
     const SceneMesh mesh = makeScene(detail, spheres);
-    const scene::BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, {});
+    const scene::BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, {}, buildOptions);
     std::printf(
         "scene: %zu triangles; BVH8: %u nodes (%.1f MB), %u leaves, %u triangle refs "
         "(%.1f MB), depth %u, built in %.0f ms\n",
@@ -310,6 +343,18 @@ int main(int argc, char** argv) {
         gpuTracer.gpu->createPipeline(shader->spirv, shader->reflection, "bvh_trace");
     gpuTracer.bvh.upload(*gpuTracer.gpu, build);
     gpuTracer.stats = defines.count("BVH_STATS") > 0;
+    for (const std::string& v : variantArgs) {
+        ShaderDefines vd = defines;
+        for (size_t b = 0, e; b < v.size(); b = e + 1) {
+            e = std::min(v.find(',', b), v.size());
+            const std::string d = v.substr(b, e - b);
+            const size_t eq = d.find('=');
+            vd[d.substr(0, eq)] = eq == std::string::npos ? "1" : d.substr(eq + 1);
+        }
+        auto vs = compiler.compile("tests/data/bvh_trace.comp", vd);
+        gpuTracer.variants.push_back(
+            gpuTracer.gpu->createPipeline(vs->spirv, vs->reflection, "bvh_trace"));
+    }
     const char* lpThreads = std::getenv("LP_NUM_THREADS");
     std::printf("device: %s (LP_NUM_THREADS=%s), CPU threads: %u\n",
                 gpuTracer.gpu->deviceInfo().name.c_str(), lpThreads ? lpThreads : "default",
@@ -376,8 +421,10 @@ int main(int argc, char** argv) {
         std::vector<uint32_t> g, e1, e2;
         gpuTracer.setRays(*s.rays, s.anyHit);
         Timing tg, t1, t2;
+        std::vector<Timing> tv(gpuTracer.variants.size());
         for (int r = 0; r < reps; ++r) {
             tg.keepBest(gpuTracer.run());
+            for (size_t v = 0; v < tv.size(); ++v) tv[v].keepBest(gpuTracer.run(int(v)));
             if (r == 0 || embreeRuns)
                 t1.keepBest(embreeTrace(embree.scene(), *s.rays, s.anyHit, 1, e1));
             if (embreeRuns) t2.keepBest(embreeTrace(embree.scene(), *s.rays, s.anyHit, 2, e2));
@@ -390,6 +437,10 @@ int main(int argc, char** argv) {
             "%-28s %8zu | %7.2f %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %6.2f | %6zu\n",
             s.name, s.rays->size(), n / tg.wall, n / t1.wall, n / t2.wall, n / tg.cpu, n / t1.cpu,
             n / t2.cpu, t1.wall / tg.wall, t2.wall / tg.wall, t1.cpu / tg.cpu, differ);
+        for (size_t v = 0; v < tv.size(); ++v)
+            std::printf("  variant %-36s GLSL %6.2f Mrays/s wall, %6.2f per CPU-s (%+.1f%%)\n",
+                        variantArgs[v].c_str(), n / tv[v].wall, n / tv[v].cpu,
+                        100.0 * (tg.cpu / tv[v].cpu - 1.0));
     }
     rtcReleaseDevice(device);
     return 0;

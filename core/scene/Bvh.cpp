@@ -262,7 +262,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
     args.minLeafSize = 1;
     args.maxLeafSize = options.maxLeafSize;
     args.traversalCost = 1.0f;
-    args.intersectionCost = 1.0f;
+    args.intersectionCost = options.intersectionCost;
     args.bvh = bvh.get();
     args.primitives = prims.data();
     args.primitiveCount = primCount;

@@ -67,8 +67,9 @@ struct BvhTriangle {
 static_assert(sizeof(BvhTriangle) == 64);
 
 struct BvhBuildOptions {
-    bool spatialSplits = true;  // RTC_BUILD_QUALITY_HIGH (SBVH); false: plain binned SAH
-    uint32_t maxLeafSize = 3;   // 1..3 (a leaf slot owns 3 triangle bits in the node)
+    bool spatialSplits = true;      // RTC_BUILD_QUALITY_HIGH (SBVH); false: plain binned SAH
+    uint32_t maxLeafSize = 3;       // 1..3 (a leaf slot owns 3 triangle bits in the node)
+    float intersectionCost = 1.0f;  // SAH cost of a triangle test relative to a node visit
 };
 
 struct BvhStats {

@@ -1,5 +1,7 @@
 #include "core/scene/Camera.h"
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <algorithm>
 #include <cmath>
 
@@ -47,6 +49,28 @@ Camera cameraAt(const Camera& camera, float time) {
     result.fov = k.fovY;
     result.fovAxis = Camera::FovAxis::Y;
     return result;
+}
+
+glm::mat4 shapeToWorldAt(const Shape& shape, float time) {
+    if (shape.path.empty()) return shape.toWorld;
+    const std::vector<ShapeKeyframe>& path = shape.path;
+    ShapeKeyframe k = path.front();
+    if (time >= path.back().time) {
+        k = path.back();
+    } else if (time > path.front().time) {
+        auto it = std::upper_bound(path.begin(), path.end(), time,
+                                   [](float t, const ShapeKeyframe& kf) { return t < kf.time; });
+        const ShapeKeyframe& a = *(it - 1);
+        const ShapeKeyframe& b = *it;
+        float span = b.time - a.time;
+        float t = span > 0.0f ? (time - a.time) / span : 0.0f;
+        k.translate = glm::mix(a.translate, b.translate, t);
+        k.rotate = glm::slerp(a.rotate, b.rotate, t);  // shortest arc
+        k.scale = glm::mix(a.scale, b.scale, t);
+    }
+    glm::mat4 m = glm::translate(glm::mat4(1.0f), k.translate) * glm::mat4_cast(k.rotate) *
+                  glm::scale(glm::mat4(1.0f), k.scale);
+    return m * shape.toWorld;
 }
 
 }  // namespace loom::scene

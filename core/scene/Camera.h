@@ -1,6 +1,6 @@
 #pragma once
-// Camera helpers shared by the loaders and the renderer: Mitsuba's look-at frame and
-// keyframed camera paths.
+// Animation helpers shared by the loaders and the renderer: Mitsuba's look-at frame, keyframed
+// camera paths and keyframed rigid shape motion.
 #include "core/scene/Scene.h"
 
 namespace loom::scene {
@@ -15,5 +15,11 @@ glm::mat4 lookAtMatrix(const glm::vec3& origin, const glm::vec3& target, const g
 // lookAtMatrix() and fov/fovAxis become the keyframe's vertical fov. Keyframes must be sorted
 // by time (the loaders sort them).
 Camera cameraAt(const Camera& camera, float time);
+
+// Object to world of `shape` at animation time `time` (frames): shape.toWorld without a path;
+// with one, M(time) * toWorld where M = translate * rotate * scale of the keyframes around
+// `time`, translation and scale interpolated linearly, rotation by slerp, clamped to the first
+// and last keyframe.
+glm::mat4 shapeToWorldAt(const Shape& shape, float time);
 
 }  // namespace loom::scene

@@ -207,6 +207,40 @@ private:
         return detail::resolvePath(mDir, f);
     }
 
+    // Per-frame rigid motion keyframes: {"time", "translate", "rotate", "scale"}.
+    std::vector<ShapeKeyframe> shapePath(const json& path, const std::string& pp) const {
+        if (!path.is_array() || path.empty())
+            fail(pp, "'path' must be a non-empty array of keyframes");
+        std::vector<ShapeKeyframe> out;
+        for (size_t i = 0; i < path.size(); ++i) {
+            const json& k = path[i];
+            std::string kp = fmt::format("{}/{}", pp, i);
+            if (!k.is_object()) fail(kp, "a keyframe must be an object");
+            checkKeys(k, kp, "shape keyframe", {"time", "translate", "rotate", "scale"});
+            if (!find(k, "time")) fail(kp, "missing key 'time'");
+            ShapeKeyframe kf;
+            kf.time = number(k, kp, "time", 0.0f);
+            kf.translate = vec3(k, kp, "translate", glm::vec3(0.0f));
+            if (const json* r = find(k, "rotate"))
+                kf.rotate = glm::quat_cast(glm::mat3(transformOp({{"rotate", *r}}, kp)));
+            if (const json* sc = find(k, "scale")) {
+                std::string sp = child(kp, "scale");
+                if (sc->is_number()) {
+                    kf.scale = glm::vec3(sc->get<float>());
+                } else {
+                    std::vector<float> v = numbers(*sc, sp, 3, "scale");
+                    kf.scale = glm::vec3(v[0], v[1], v[2]);
+                }
+                if (kf.scale.x == 0.0f || kf.scale.y == 0.0f || kf.scale.z == 0.0f)
+                    fail(sp, "a keyframe scale must not be zero");
+            }
+            if (!out.empty() && kf.time <= out.back().time)
+                fail(child(kp, "time"), "keyframe times must increase");
+            out.push_back(kf);
+        }
+        return out;
+    }
+
     // ---- transforms -------------------------------------------------------------------------
     // An array of operations applied first to last (Mitsuba order), or a single operation.
     glm::mat4 transform(const json& v, const std::string& ptr) const {
@@ -449,6 +483,7 @@ private:
                                          "material",
                                          "transform",
                                          "transform_end",
+                                         "path",
                                          "emission",
                                          "caustic_caster",
                                          "caustic_receiver",
@@ -486,6 +521,7 @@ private:
             s.toWorldEnd = transform(*t, child(ptr, "transform_end"));
             s.moving = true;
         }
+        if (const json* path = find(j, "path")) s.path = shapePath(*path, child(ptr, "path"));
         bool faceNormals = boolean(j, ptr, "face_normals", false);
         bool flip = boolean(j, ptr, "flip_normals", false);
         auto finish = [&](Mesh m) {

@@ -3,6 +3,7 @@
 // by the GPU upload (SceneGpu). Units: world space, right-handed, y up by convention (Mitsuba
 // scenes keep their own axes). Angles in degrees only where the source format uses them.
 #include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include <cstdint>
 #include <string>
@@ -82,6 +83,15 @@ enum ShapeFlags : uint32_t {
     kDefaultShapeFlags = kVisibleCamera | kVisibleShadow,
 };
 
+// One keyframe of a shape's per-frame rigid motion: the motion at `time` is
+// translate * rotate * scale, applied after the shape's toWorld (scene/README.md).
+struct ShapeKeyframe {
+    float time = 0.0f;  // frame index (fractional allowed)
+    glm::vec3 translate{0.0f};
+    glm::quat rotate{1.0f, 0.0f, 0.0f, 0.0f};
+    glm::vec3 scale{1.0f};
+};
+
 struct Shape {
     std::string name;
     int mesh = -1;                 // index into Scene::meshes
@@ -93,6 +103,9 @@ struct Shape {
     // Optional rigid motion over the shutter: toWorld at shutter close (identity = none).
     bool moving = false;
     glm::mat4 toWorldEnd{1.0f};
+    // Optional per-frame motion (keyframes sorted by time; empty = static): object to world at
+    // frame time t is shapeToWorldAt(shape, t) (Camera.h). Not blurred over the shutter.
+    std::vector<ShapeKeyframe> path;
 };
 
 enum class LightType { Point, Spot, Directional, Environment, Constant };

@@ -1,6 +1,7 @@
 #include "core/scene/SceneGpu.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -57,7 +58,43 @@ std::shared_ptr<gpu::Buffer> upload(gpu::Context& gpu, const std::vector<T>& dat
     return buf;
 }
 
+// World-space vertices of `mesh` under `toWorld` (normals by the inverse transpose).
+void transformVertices(const Mesh& mesh, const glm::mat4& toWorld, VertexGpu* out,
+                       glm::vec3* positions) {
+    glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(toWorld)));
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+        glm::vec3 p = glm::vec3(toWorld * glm::vec4(mesh.positions[v], 1.0f));
+        glm::vec3 n(0.0f);
+        if (!mesh.faceNormals && v < mesh.normals.size()) {
+            n = normalMatrix * mesh.normals[v];
+            float len = glm::length(n);
+            n = len > 0.0f ? n / len : glm::vec3(0.0f);
+        }
+        glm::vec2 uv = v < mesh.uvs.size() ? mesh.uvs[v] : glm::vec2(0.0f);
+        out[v] = {glm::vec4(p, uv.x), glm::vec4(n, uv.y)};
+        positions[v] = p;
+    }
+}
+
+// Rows of the affine map from a shape's world position now to the previous frame's
+// (prev * now^-1, in double so that a static shape gets the identity exactly).
+std::array<glm::vec4, 3> motionRows(const glm::mat4& prev, const glm::mat4& now) {
+    glm::dmat4 m = glm::dmat4(prev) * glm::inverse(glm::dmat4(now));
+    if (prev == now) m = glm::dmat4(1.0);
+    std::array<glm::vec4, 3> rows;
+    for (int r = 0; r < 3; ++r) rows[r] = glm::vec4(m[0][r], m[1][r], m[2][r], m[3][r]);
+    return rows;
+}
+
 }  // namespace
+
+// Shapes with a per-frame path (Shape::path): where their vertices live, and the object to
+// world of the current and the previous frame time.
+struct MovingShape {
+    size_t shape;
+    uint32_t firstVertex;
+    glm::mat4 now, prev;
+};
 
 struct SceneGpu::Impl {
     std::shared_ptr<gpu::Buffer> vertices, triangles, shapes, materials, textures, texels,
@@ -65,12 +102,25 @@ struct SceneGpu::Impl {
     BvhGpu bvh;
     SceneInfoGpu infoData{};
     std::vector<EnvMapDistribution> envs;
+    // Per shape, 3 rows of the previous-frame map (motionRows); identity for static shapes.
+    std::shared_ptr<gpu::Buffer> shapeMotion;
+    std::vector<glm::vec4> shapeMotionRows;
+    // Dynamic scenes only (empty when nothing moves): CPU copies for re-transforming moving
+    // shapes and rebuilding the BVH.
+    std::vector<MovingShape> moving;
+    std::vector<VertexGpu> cpuVertices;
+    std::vector<glm::vec3> cpuPositions;
+    std::vector<glm::uvec3> cpuIndices;
+    std::vector<uint32_t> cpuMasks;
+    float shapeTime = 0.0f;  // frame time the vertices are at
 };
 
 SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     : mImpl(std::make_unique<Impl>()), mGpu(gpu), mScene(std::move(sceneIn)) {
     auto t0 = std::chrono::steady_clock::now();
     const Scene& s = mScene;
+    const float shapeTime = s.camera.shutterOpen;  // frame 0 at shutter open, as setFrame(0)
+    mImpl->shapeTime = shapeTime;
 
     // Flatten shapes into world-space triangles, contiguous per shape.
     std::vector<VertexGpu> vertices;
@@ -93,21 +143,40 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
         sg.firstTriangle = uint32_t(triangles.size());
         sg.emission = glm::vec4(shape.emission, mesh.uvs.empty() ? 0.0f : 1.0f);
         shapes.push_back(sg);
-        glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(shape.toWorld)));
         uint32_t base = uint32_t(vertices.size());
-        for (size_t v = 0; v < mesh.positions.size(); ++v) {
-            glm::vec3 p = glm::vec3(shape.toWorld * glm::vec4(mesh.positions[v], 1.0f));
-            glm::vec3 n(0.0f);
-            if (!mesh.faceNormals && v < mesh.normals.size()) {
-                n = normalMatrix * mesh.normals[v];
-                float len = glm::length(n);
-                n = len > 0.0f ? n / len : glm::vec3(0.0f);
+        // Moving shapes start at frame time 0 (setFrame moves them); the bounds cover their
+        // keyframes so that light sampling discs (directional, environment) cover them.
+        glm::mat4 toWorld = shapeToWorldAt(shape, shapeTime);
+        if (!shape.path.empty()) mImpl->moving.push_back({si, base, toWorld, toWorld});
+        vertices.resize(base + mesh.positions.size());
+        positions.resize(base + mesh.positions.size());
+        transformVertices(mesh, toWorld, vertices.data() + base, positions.data() + base);
+        for (size_t v = base; v < positions.size(); ++v) {
+            lo = glm::min(lo, positions[v]);
+            hi = glm::max(hi, positions[v]);
+        }
+        if (!shape.path.empty()) {
+            // Keyframes and segment midpoints, padded for the arcs of rotations in between.
+            std::vector<float> times;
+            for (size_t k = 0; k < shape.path.size(); ++k) {
+                times.push_back(shape.path[k].time);
+                if (k + 1 < shape.path.size())
+                    for (int i = 1; i < 8; ++i)
+                        times.push_back(
+                            glm::mix(shape.path[k].time, shape.path[k + 1].time, float(i) / 8.0f));
             }
-            glm::vec2 uv = v < mesh.uvs.size() ? mesh.uvs[v] : glm::vec2(0.0f);
-            vertices.push_back({glm::vec4(p, uv.x), glm::vec4(n, uv.y)});
-            positions.push_back(p);
-            lo = glm::min(lo, p);
-            hi = glm::max(hi, p);
+            glm::vec3 mlo(1e30f), mhi(-1e30f);
+            for (float t : times) {
+                glm::mat4 m = shapeToWorldAt(shape, t);
+                for (const glm::vec3& p : mesh.positions) {
+                    glm::vec3 w = glm::vec3(m * glm::vec4(p, 1.0f));
+                    mlo = glm::min(mlo, w);
+                    mhi = glm::max(mhi, w);
+                }
+            }
+            glm::vec3 pad = 0.05f * (mhi - mlo);
+            lo = glm::min(lo, mlo - pad);
+            hi = glm::max(hi, mhi + pad);
         }
         for (const auto& tri : mesh.indices) {
             triangles.push_back(glm::uvec4(tri + base, uint32_t(si)));
@@ -243,6 +312,19 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     BvhBuild build = buildBvh(positions, indices, masks);
     g.bvh.upload(gpu, build);
 
+    g.shapeMotionRows.resize(shapes.size() * 3);
+    for (size_t si = 0; si < shapes.size(); ++si) {
+        auto rows = motionRows(glm::mat4(1.0f), glm::mat4(1.0f));
+        std::copy(rows.begin(), rows.end(), g.shapeMotionRows.begin() + long(3 * si));
+    }
+    g.shapeMotion = upload(gpu, g.shapeMotionRows, "SceneShapeMotion");
+    if (!g.moving.empty()) {  // keep what per-frame updates need
+        g.cpuVertices = std::move(vertices);
+        g.cpuPositions = std::move(positions);
+        g.cpuIndices = std::move(indices);
+        g.cpuMasks = std::move(masks);
+    }
+
     mStats.triangles = triangles.size();
     mStats.shapes = shapes.size();
     mStats.materials = materials.size();
@@ -269,7 +351,8 @@ void SceneGpu::bind(gpu::Bindings& b) const {
         .set("SceneTexels", g.texels)
         .set("SceneLights", g.lights)
         .set("SceneLightCdf", g.lightCdf)
-        .set("SceneInfoBuffer", g.info);
+        .set("SceneInfoBuffer", g.info)
+        .set("SceneShapeMotion", g.shapeMotion);
     bindEnvMaps(b, g.envDistribution);
     g.bvh.bind(b);
 }
@@ -308,6 +391,38 @@ CameraPoseGpu poseAt(const Camera& base, float time, uint32_t width, uint32_t he
 }
 }  // namespace
 
+void SceneGpu::updateShapes(float time, bool firstFrame) {
+    auto& g = *mImpl;
+    if (g.moving.empty()) return;  // static scene: nothing to do, ever
+    bool changed = false;
+    for (MovingShape& m : g.moving) {
+        const Shape& shape = mScene.shapes[m.shape];
+        glm::mat4 now = shapeToWorldAt(shape, time);
+        m.prev = firstFrame ? now : m.now;
+        if (now != m.now) {
+            const Mesh& mesh = mScene.meshes[shape.mesh];
+            transformVertices(mesh, now, g.cpuVertices.data() + m.firstVertex,
+                              g.cpuPositions.data() + m.firstVertex);
+            mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex,
+                              mesh.positions.size() * sizeof(VertexGpu),
+                              m.firstVertex * sizeof(VertexGpu));
+            changed = true;
+        }
+        m.now = now;
+        auto rows = motionRows(m.prev, m.now);
+        std::copy(rows.begin(), rows.end(), g.shapeMotionRows.begin() + long(3 * m.shape));
+    }
+    mGpu.uploadBuffer(*g.shapeMotion, g.shapeMotionRows.data(),
+                      g.shapeMotionRows.size() * sizeof(glm::vec4));
+    g.shapeTime = time;
+    if (!changed) return;
+    // Rigid motion changes the tree's boxes: rebuild it (milliseconds for the project scenes;
+    // a two-level BVH would spare the static part of large scenes).
+    BvhBuild build = buildBvh(g.cpuPositions, g.cpuIndices, g.cpuMasks);
+    g.bvh.upload(mGpu, build);
+    mStats.bvhNodes = build.stats.nodes;
+}
+
 void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
     if (!mCameraDirty && time == mTime && width == mWidth && height == mHeight) return;
     auto& info = mImpl->infoData;
@@ -319,6 +434,7 @@ void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
     // Previous frame's pose: the last uploaded open pose (same pose on the first frame).
     info.prev = (mTime < 0.0f || width != mWidth || height != mHeight) ? info.open : prev;
     mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
+    if (time != mTime) updateShapes(time + c.shutterOpen, mTime < 0.0f);
     if (time != mTime || mCameraDirty) ++mRevision;
     mTime = time;
     mWidth = width;

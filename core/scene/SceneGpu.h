@@ -23,7 +23,9 @@ public:
 
     // Binds every scene buffer by the GLSL names of the scene libraries.
     void bind(gpu::Bindings& bindings) const;
-    // Camera poses for frame time t (in frames) at the given aspect ratio; uploads when changed.
+    // Camera poses and moving shapes (Shape::path) for frame time t (in frames) at the given
+    // aspect ratio; uploads when changed. The previous frame (motion vectors) is the last
+    // different time set.
     void setFrame(float time, uint32_t width, uint32_t height);
     // Replaces the camera (Lua / inspector); bumps revision().
     void setCamera(const Camera& camera);
@@ -36,6 +38,10 @@ public:
     glm::vec4 boundingSphere() const { return mBounds; }
 
 private:
+    // Moves shapes with a keyframe path to frame time `time` (vertices, BVH, the per-shape
+    // previous-frame maps of scene.glsl's previous_position); a no-op for static scenes.
+    void updateShapes(float time, bool firstFrame);
+
     struct Impl;
     std::unique_ptr<Impl> mImpl;
     gpu::Context& mGpu;

@@ -22,7 +22,7 @@ const Output kOutputs[] = {
     {"albedo", "albedoImage", gpu::Format::RGBA32F, "diffuse reflectance (textured)"},
     {"roughness", "roughnessImage", gpu::Format::R32F, "microfacet alpha (0 = smooth)"},
     {"motion", "motionImage", gpu::Format::RG32F,
-     "previous-frame film position minus current, pixels (camera motion)"},
+     "previous-frame film position minus current, pixels (camera and shape motion)"},
     {"sample", "sampleImage", gpu::Format::RGBA32F, "subpixel offset xy, lens sample zw"},
 };
 }  // namespace

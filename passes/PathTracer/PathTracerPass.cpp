@@ -1,5 +1,7 @@
 // PathTracer: the reference estimator (NEE + BSDF sampling with MIS, Russian roulette, thin
 // lens, camera motion blur) with AOVs. See README.md.
+#include <fmt/format.h>
+
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 
@@ -8,6 +10,12 @@ namespace loom {
 class PathTracerPass : public Pass {
 public:
     void reflect(PassReflection& r) const override {
+        r.inputTexture("vbuffer", gpu::Format::RGBA32UI)
+            .optional()
+            .doc("GBuffer.vbuffer: primary hits of the first sample (not re-traced)");
+        r.inputTexture("sample", gpu::Format::RGBA32F)
+            .optional()
+            .doc("GBuffer.sample: film and lens sample of those hits");
         r.outputTexture("color", gpu::Format::RGBA32F).doc("radiance, mean of spp samples");
         r.outputTexture("albedo", gpu::Format::RGBA32F).optional().doc("first-hit reflectance");
         r.outputTexture("normal", gpu::Format::RGBA32F).optional().doc("first-hit shading normal");
@@ -27,10 +35,10 @@ public:
     void execute(ExecuteContext& ctx) override {
         const auto& scene = ctx.scene();
         ShaderDefines defines;
-        for (const char* aov : {"albedo", "normal", "direct", "indirect"}) {
-            std::string name = aov;
+        for (const char* port : {"albedo", "normal", "direct", "indirect", "vbuffer", "sample"}) {
+            std::string name = fmt::format("HAS_{}", port);
             for (auto& c : name) c = char(std::toupper(c));
-            defines["HAS_" + name] = ctx.has(aov) ? "1" : "0";
+            defines[name] = std::string(ctx.has(port) ? "1" : "0");
         }
         auto pipeline = ctx.shaders().pipeline("passes/path_tracer/path_tracer.comp", defines);
         if (!mRayCounter) mRayCounter = ctx.gpu().createBuffer(16, "RayCounter");
@@ -40,8 +48,12 @@ public:
         scene.bind(b);
         b.set("RayCounter", mRayCounter);
         b.set("colorImage", ctx.texture("color"));
-        for (auto [port, glsl] : {std::pair{"albedo", "albedoImage"}, {"normal", "normalImage"},
-                                  {"direct", "directImage"}, {"indirect", "indirectImage"}})
+        for (auto [port, glsl] : {std::pair{"albedo", "albedoImage"},
+                                  {"normal", "normalImage"},
+                                  {"direct", "directImage"},
+                                  {"indirect", "indirectImage"},
+                                  {"vbuffer", "vbufferImage"},
+                                  {"sample", "sampleImage"}})
             if (ctx.has(port)) b.set(glsl, ctx.texture(port));
         gpu::PushConstants pc(*pipeline);
         uint32_t size[2] = {ctx.width(), ctx.height()};

@@ -41,8 +41,10 @@ ivec3 bvh_adjacent(uint prim) { return bvh_adjacency.data[prim].xyz; }
 #define BVH_STACK_SIZE 32
 
 #ifdef BVH_STATS
-// Traversal statistics of the last query of this invocation (profiling only).
-uint bvh_stat_nodes = 0u, bvh_stat_tris = 0u;
+#extension GL_KHR_shader_subgroup_arithmetic : require
+// Traversal statistics of the last query of this invocation (profiling only): nodes and
+// triangles visited, and iterations of the triangle loop its SIMD batch (subgroup) ran.
+uint bvh_stat_nodes = 0u, bvh_stat_tris = 0u, bvh_stat_tri_iters = 0u;
 #endif
 
 struct Hit {
@@ -117,7 +119,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     // slot's inner child from x (3 bits per slot).
     uvec2 ngroup = uvec2(0u, 0x80000000u);
 #ifdef BVH_STATS
-    bvh_stat_nodes = 0u, bvh_stat_tris = 0u;
+    bvh_stat_nodes = 0u, bvh_stat_tris = 0u, bvh_stat_tri_iters = 0u;
 #endif
     while (true) {
 #ifdef BVH_STATS
@@ -166,6 +168,9 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         spread = (spread | (spread << 2u)) & 0x249249u;
         uint leaf_bits = w1.z & 0x00ffffffu;
         uint tri_hits = (spread * 7u) & leaf_bits;
+#ifdef BVH_STATS
+        bvh_stat_tri_iters += subgroupMax(bitCount(tri_hits));
+#endif
         while (tri_hits != 0u) {
             uint k = uint(findLSB(tri_hits));
             tri_hits &= tri_hits - 1u;

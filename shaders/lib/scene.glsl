@@ -59,6 +59,17 @@ layout(std430) readonly buffer SceneTexels { vec4 scene_texels[]; };
 layout(std430) readonly buffer SceneLights { LightGpu scene_lights[]; };
 layout(std430) readonly buffer SceneLightCdf { float scene_light_cdf[]; };  // inclusive prefix
 layout(std430) readonly buffer SceneInfoBuffer { SceneInfo scene_info; };
+// Per shape, 3 rows of the affine map from a world position on the shape at this frame to
+// the same surface point at the previous frame (shapes moving along a keyframe path; the
+// identity for static shapes). Only motion vectors and temporal reuse need it.
+layout(std430) readonly buffer SceneShapeMotion { vec4 scene_shape_motion[]; };
+
+// Where the surface point p of `shape` was on the previous frame (rigid shape motion).
+vec3 previous_position(uint shape, vec3 p) {
+    vec4 h = vec4(p, 1.0);
+    return vec3(dot(scene_shape_motion[3u * shape], h), dot(scene_shape_motion[3u * shape + 1u], h),
+                dot(scene_shape_motion[3u * shape + 2u], h));
+}
 
 // Bilinear texture lookup with wrap-around (uv origin at the top-left texel row 0).
 vec4 texture_fetch(uint tex, vec2 uv) {

@@ -2,8 +2,9 @@
 // Traces a buffer of rays through lib/bvh.glsl (tests/gpu/test_bvh.cpp, bench/bench_bvh.cpp).
 // Ray i = (origin, tmin), (direction, tmax); result i = (t, prim, u, v) for closest hit
 // (prim = ~0u on a miss) or (occluded, 0, 0, 0) for any hit. With BVH_STATS defined, z and w
-// of a closest-hit result are the nodes and triangles visited; with BVH_ADJACENCY, xyz of
-// result i are the neighbours of triangle i instead.
+// of a closest-hit result are the nodes and triangles visited and x the triangle-loop
+// iterations its subgroup ran; with BVH_ADJACENCY, xyz of result i are the neighbours of
+// triangle i instead.
 #include "lib/bvh.glsl"
 
 layout(local_size_x = 64) in;
@@ -39,6 +40,7 @@ void main() {
                                 : uvec4(floatBitsToUint(b.w), 0xffffffffu, 0u, 0u);
 #ifdef BVH_STATS
         results.data[i].zw = uvec2(bvh_stat_nodes, bvh_stat_tris);  // instead of (u, v)
+        results.data[i].x = bvh_stat_tri_iters;  // instead of t
 #endif
     }
 #ifdef BVH_ADJACENCY

@@ -104,7 +104,8 @@ assert(p["pt.strategy"].type == "enum" and #p["pt.strategy"].choices == 3)
 assert(p["pt.strategy"].choices[1] == "mis")
 assert(p["tm.exposure"].value == 1.0 and p["tm.srgb"].type == "bool")
 local passes = r:passes()
-assert(#passes == 3 and passes[1].name == "pt" and passes[1].type == "PathTracer")
+assert(#passes == 4 and passes[1].name == "gbuf" and passes[1].type == "GBuffer")
+assert(passes[2].name == "pt" and passes[2].type == "PathTracer")
 assert(r:outputs()[1] == "tm.output")
 r:frame()
 r:reset()
@@ -162,7 +163,7 @@ expect_error(function() r:set("pt.sampelsPerPixel", 4) end,
              "valid parameters: samplesPerPixel, maxBounces")
 expect_error(function() return r:get("pt.nope") end, "no parameter 'nope'", "valid parameters:")
 expect_error(function() r:set("ptx.samplesPerPixel", 4) end,
-             "no pass named 'ptx'", "passes: pt, accum, tm")
+             "no pass named 'ptx'", "passes: gbuf, pt, accum, tm")
 expect_error(function() r:set("samplesPerPixel", 4) end, "expected 'pass.param'")
 expect_error(function() r:set("pt.samplesPerPixel", "four") end,
              "expects an integer", "string")
@@ -387,8 +388,8 @@ local r = loom.renderer{graph = "graphs/pt.json", scene = "scenes/cornell_box.js
                         width = 16, height = 16}
 r:frame()
 local t = r:timings()
-assert(#t.passes == 3 and t.passes[1].pass == "pt" and t.passes[3].pass == "tm")
-assert(t.frame_ms > 0 and t.passes[1].ms > 0)
+assert(#t.passes == 4 and t.passes[2].pass == "pt" and t.passes[4].pass == "tm")
+assert(t.frame_ms > 0 and t.passes[2].ms > 0)
 local s = r:stats()
 assert(s["pt.rays"] and s["pt.rays"] > 0, "PathTracer counts rays")
 -- The loop stops on the frame that crosses the budget: spent >= budget, and without that last

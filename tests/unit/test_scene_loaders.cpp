@@ -327,8 +327,8 @@ TEST(SceneLoaders, JsonSceneContents) {
     EXPECT_FLOAT_EQ(lo, 0.05f);
     EXPECT_FLOAT_EQ(hi, 0.6f);
     Scene f = loadScene((fs::path(LOOM_SOURCE_DIR) / "scenes" / "fine_geometry.json").string());
-    EXPECT_TRUE(
-        std::any_of(f.shapes.begin(), f.shapes.end(), [](const Shape& x) { return x.moving; }));
+    EXPECT_TRUE(std::any_of(f.shapes.begin(), f.shapes.end(),
+                            [](const Shape& x) { return x.path.size() == 4; }));
 }
 
 // ------------------------------------------------------------------------------------------
@@ -768,3 +768,35 @@ TEST(SceneLoaders, ObjMtlScene) {
 }
 
 }  // namespace
+
+TEST(SceneLoaders, ShapePathParsesAndInterpolates) {
+    TempDir tmp;
+    std::string path = tmp.write("moving.json", R"({"loom_scene": 1, "shapes": [
+        {"name": "box", "type": "cube", "transform": {"scale": 0.5}, "path": [
+            {"time": 0, "translate": [1, 0, 0]},
+            {"time": 4, "translate": [3, 0, 0], "rotate": {"axis": [0, 1, 0], "angle": 90},
+             "scale": 2}]},
+        {"name": "still", "type": "rectangle"}]})");
+    Scene s = loadScene(path);
+    const Shape* box = shapeNamed(s, "box");
+    ASSERT_NE(box, nullptr);
+    ASSERT_EQ(box->path.size(), 2u);
+    EXPECT_TRUE(shapeNamed(s, "still")->path.empty());
+    // Clamped before the first key; object point (1, 0, 0) -> scale 0.5 -> translate.
+    expectNear(apply(shapeToWorldAt(*box, -1.0f), {1, 0, 0}), {1.5f, 0, 0});
+    // Halfway: translate (2, 0, 0), rotate 45 degrees about y, scale 1.5 (after toWorld).
+    const float c = std::cos(glm::radians(45.0f)) * 0.75f;
+    expectNear(apply(shapeToWorldAt(*box, 2.0f), {1, 0, 0}), {2.0f + c, 0, -c});
+    // Clamped after the last key: 90 degrees about y maps +x to -z.
+    expectNear(apply(shapeToWorldAt(*box, 9.0f), {1, 0, 0}), {3, 0, -1});
+
+    std::string bad = tmp.write("bad.json", R"({"loom_scene": 1, "shapes": [
+        {"type": "cube", "path": [{"time": 1}, {"time": 1, "translate": [0, 1, 0]}]}]})");
+    std::string e = loadError(bad);
+    EXPECT_NE(e.find("bad.json:2:"), std::string::npos) << e;
+    EXPECT_NE(e.find("keyframe times must increase"), std::string::npos) << e;
+    std::string unknown = tmp.write("unknown.json", R"({"loom_scene": 1, "shapes": [
+        {"type": "cube", "path": [{"time": 0, "origin": [0, 1, 0]}]}]})");
+    e = loadError(unknown);
+    EXPECT_NE(e.find("unknown key 'origin'"), std::string::npos) << e;
+}

@@ -57,11 +57,12 @@ void main() {
     imageStore(positionImage, ip, vec4(sh.sp.p, 1.0));
     imageStore(albedoImage, ip, vec4(sh.mat.diffuse.rgb, 1.0));
     imageStore(roughnessImage, ip, vec4(material_alpha(sh.mat)));
-    // Motion vector: where the (static) hit point was on the previous frame's film.
+    // Motion vector: where the hit point was on the previous frame's film (camera motion and
+    // rigid shape motion).
     vec2 uv_prev;
     CameraFrame prev = camera_frame(scene_info.camera_prev, scene_info.camera_prev, 0.0);
     vec2 mv = vec2(0.0);
-    if (camera_project(prev, sh.sp.p, uv_prev))
+    if (camera_project(prev, previous_position(sh.sp.shape, sh.sp.p), uv_prev))
         mv = uv_prev * vec2(pc.frameSize) - (vec2(pixel) + sub);
     imageStore(motionImage, ip, vec4(mv, 0.0, 0.0));
 }

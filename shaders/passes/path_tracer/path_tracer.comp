@@ -23,6 +23,14 @@ layout(rgba32f) uniform writeonly image2D directImage;
 #if HAS_INDIRECT
 layout(rgba32f) uniform writeonly image2D indirectImage;
 #endif
+// Optional GBuffer inputs: the first sample's primary hit comes from the V-buffer instead of
+// a trace, with the GBuffer's film and lens sample (same random stream positions).
+#if HAS_VBUFFER
+layout(rgba32ui) uniform readonly uimage2D vbufferImage;
+#endif
+#if HAS_SAMPLE
+layout(rgba32f) uniform readonly image2D sampleImage;
+#endif
 
 // Rays traced this frame (closest + shadow), for Mrays/s.
 layout(std430) buffer RayCounter { uint ray_count; };
@@ -57,6 +65,13 @@ void main() {
         vec2 uv = (vec2(pixel) + rng_next2(rng)) / vec2(pc.frameSize);
         vec2 u_lens = rng_next2(rng);
         float shutter = pc.motionBlur != 0u ? rng_next(rng) : 0.0;
+#if HAS_SAMPLE
+        if (s == 0u) {
+            vec4 smp = imageLoad(sampleImage, ivec2(pixel));
+            uv = (vec2(pixel) + smp.xy) / vec2(pc.frameSize);
+            u_lens = smp.zw;
+        }
+#endif
         CameraFrame cam = camera_frame(scene_info.camera_open, scene_info.camera_close, shutter);
         vec3 o, d;
         camera_ray(cam, uv, u_lens, o, d);
@@ -68,8 +83,21 @@ void main() {
         vec3 prev_p = o;
         for (uint depth = 0u;; ++depth) {
             Hit hit;
-            ++rays;
-            if (!trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit)) {
+            bool found;
+#if HAS_VBUFFER
+            if (s == 0u && depth == 0u) {
+                uvec4 v = imageLoad(vbufferImage, ivec2(pixel));
+                hit.prim = v.x;
+                hit.bary = uintBitsToFloat(v.yz);
+                hit.t = 0.0;  // unused: shading works from prim and bary
+                found = v.x != ~0u;
+            } else
+#endif
+            {
+                ++rays;
+                found = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit);
+            }
+            if (!found) {
                 // Environment, MIS-weighted against light sampling of the environment.
                 vec3 Le = environment_radiance(d);
                 if (any(greaterThan(Le, vec3(0.0)))) {
