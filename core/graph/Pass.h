@@ -35,6 +35,10 @@ struct PortDesc {
     std::optional<gpu::Format> format;  // textures; nullopt on an input = any format
     SizeRule size;
     bool optional = false;
+    // Input only: reads the value the connected output had at the end of the previous frame
+    // (a temporal feedback edge: exempt from cycle checks and ordering; the graph keeps a
+    // history copy; ExecuteContext::historyReset() is true while that copy is not valid yet).
+    bool previousFrame = false;
     std::string doc;
 };
 
@@ -68,6 +72,7 @@ public:
         PortBuilder& optional(bool o = true) { mPort.optional = o; return *this; }
         PortBuilder& format(gpu::Format f) { mPort.format = f; return *this; }
         PortBuilder& anyFormat() { mPort.format.reset(); return *this; }
+        PortBuilder& previousFrame(bool p = true) { mPort.previousFrame = p; return *this; }
         PortBuilder& scale(float s) { mPort.size.scale = s; return *this; }
         PortBuilder& fixedSize(uint32_t w, uint32_t h) {
             mPort.size.mode = SizeRule::Mode::Fixed;

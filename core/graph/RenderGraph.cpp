@@ -21,6 +21,15 @@ std::pair<std::string, std::string> splitPort(const std::string& s) {
     return {s.substr(0, dot), s.substr(dot + 1)};
 }
 
+// An edge into a previous-frame input: a temporal feedback edge (no ordering constraint).
+bool isFeedbackEdge(const GraphEdge& e, const std::map<std::string, PassReflection>& refl) {
+    if (e.isExecutionOnly()) return false;
+    auto it = refl.find(e.dst);
+    if (it == refl.end()) return false;
+    const PortDesc* p = it->second.findPort(e.dstPort);
+    return p && p->isInput && p->previousFrame;
+}
+
 std::string joinNames(const std::vector<std::string>& names, const char* sep = ", ") {
     std::string out;
     for (auto& n : names) out += (out.empty() ? "" : sep) + n;
@@ -358,7 +367,8 @@ void RenderGraph::validate() const {
         std::string at = e.where.empty() ? where("/edges") : e.where;
         requireNode(e.src, at);
         requireNode(e.dst, at);
-        if (e.src == e.dst) throw GraphError(at + ": pass '" + e.src + "' is connected to itself");
+        if (e.src == e.dst && !isFeedbackEdge(e, refl))
+            throw GraphError(at + ": pass '" + e.src + "' is connected to itself");
         if (e.isExecutionOnly()) continue;
         const Pass* sp = findPass(e.src);
         const Pass* dp = findPass(e.dst);
@@ -411,6 +421,7 @@ void RenderGraph::validate() const {
     std::map<std::string, std::vector<std::string>> succ;
     for (auto& p : mPasses) indeg[p->name()] = 0;
     for (auto& e : mEdges) {
+        if (isFeedbackEdge(e, refl)) continue;
         succ[e.src].push_back(e.dst);
         ++indeg[e.dst];
     }
@@ -508,7 +519,7 @@ CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
     std::map<std::string, int> indeg;
     for (auto& n : keep) indeg[n] = 0;
     for (auto& e : mEdges)
-        if (keep.count(e.src) && keep.count(e.dst)) ++indeg[e.dst];
+        if (keep.count(e.src) && keep.count(e.dst) && !isFeedbackEdge(e, refl)) ++indeg[e.dst];
     std::vector<bool> done(mPasses.size(), false);
     while (cg.order.size() < keep.size()) {
         int pick = -1;
@@ -519,7 +530,8 @@ CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
         done[pick] = true;
         cg.order.push_back(pick);
         for (auto& e : mEdges)
-            if (e.src == mPasses[pick]->name() && keep.count(e.dst)) --indeg[e.dst];
+            if (e.src == mPasses[pick]->name() && keep.count(e.dst) && !isFeedbackEdge(e, refl))
+                --indeg[e.dst];
     }
     std::map<std::string, int> position;
     for (size_t i = 0; i < cg.order.size(); ++i) position[mPasses[cg.order[i]]->name()] = int(i);
@@ -554,7 +566,8 @@ CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
             for (auto& e : mEdges)
                 if (e.src == pass.name() && e.srcPort == port.name && keep.count(e.dst)) {
                     consumed = true;
-                    last = std::max(last, position[e.dst]);
+                    // A feedback edge copies the resource into its history after the frame.
+                    last = std::max(last, isFeedbackEdge(e, refl) ? end : position[e.dst]);
                 }
             if (port.optional && !consumed && !isOutput) continue;
             CompiledGraph::Resource r;
@@ -581,11 +594,31 @@ CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
             cg.resources.push_back(r);
         }
     }
-    // Inputs point at their producer's resource.
+    // Inputs point at their producer's resource; previous-frame inputs at a persistent history
+    // copy of it (one per produced port, shared by its feedback consumers).
     for (auto& e : mEdges) {
         if (e.isExecutionOnly() || !keep.count(e.dst)) continue;
-        auto it = cg.portResource.find(e.src + "." + e.srcPort);
-        if (it != cg.portResource.end()) cg.portResource[e.dst + "." + e.dstPort] = it->second;
+        std::string srcKey = e.src + "." + e.srcPort;
+        auto it = cg.portResource.find(srcKey);
+        if (it == cg.portResource.end()) continue;
+        int ri = it->second;
+        if (isFeedbackEdge(e, refl)) {
+            std::string histKey = srcKey + "@prev";
+            auto h = cg.portResource.find(histKey);
+            if (h == cg.portResource.end()) {
+                CompiledGraph::Resource r = cg.resources[ri];
+                r.name = histKey;
+                r.firstUse = 0;
+                r.lastUse = end;
+                r.persistent = true;
+                r.graphOutput = false;
+                r.historyOf = ri;
+                h = cg.portResource.emplace(histKey, int(cg.resources.size())).first;
+                cg.resources.push_back(r);
+            }
+            ri = h->second;
+        }
+        cg.portResource[e.dst + "." + e.dstPort] = ri;
     }
 
     // Stage 5: alias. Transient resources with identical descriptions and disjoint lifetimes
@@ -603,7 +636,7 @@ CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
     });
     for (int ri : byFirstUse) {
         auto& r = cg.resources[ri];
-        bool shareable = !r.persistent && !r.graphOutput;
+        bool shareable = mAliasing && !r.persistent && !r.graphOutput;
         if (shareable) {
             for (size_t s = 0; s < slots.size(); ++s) {
                 const auto& d = *slots[s].desc;
@@ -674,8 +707,20 @@ void RenderGraph::allocate(gpu::Context& gpu) {
             mPhysical[r.physical] = buf;
             if (r.persistent) mPersistentBuffers[r.name] = buf;
         }
-        if (r.persistent) mFreshHistory.insert(r.name.substr(0, r.name.find('#')));
     }
+    resetHistory();
+}
+
+void RenderGraph::resetHistory() {
+    if (!mCompiled) return;
+    const auto& cg = *mCompiled;
+    for (const auto& r : cg.resources)
+        if (r.persistent && r.historyOf < 0)
+            mFreshHistory.insert(r.name.substr(0, r.name.find('#')));
+    // Consumers of a history copy see historyReset() until it holds a frame.
+    for (const auto& [key, ri] : cg.portResource)
+        if (cg.resources[ri].historyOf >= 0 && key.find('@') == std::string::npos)
+            mFreshHistory.insert(splitPort(key).first);
 }
 
 void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t width,
@@ -757,6 +802,18 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
         cmd->barrier();
         stamps.push_back(cmd->timestamp());
     }
+    // Feedback edges: keep this frame's value for the next frame's previous-frame inputs.
+    for (const auto& r : cg.resources) {
+        if (r.historyOf < 0) continue;
+        const auto& src = cg.resources[r.historyOf];
+        if (r.kind == ResourceKind::Texture)
+            cmd->copyImage(*std::static_pointer_cast<gpu::Image>(mPhysical[src.physical]),
+                           *std::static_pointer_cast<gpu::Image>(mPhysical[r.physical]));
+        else
+            cmd->copyBuffer(*std::static_pointer_cast<gpu::Buffer>(mPhysical[src.physical]),
+                            *std::static_pointer_cast<gpu::Buffer>(mPhysical[r.physical]),
+                            r.bytes);
+    }
     gpu.submit(*cmd);
     const auto& ns = cmd->timestampsNs();
     mTimings.clear();
@@ -784,6 +841,12 @@ std::shared_ptr<gpu::Buffer> RenderGraph::outputBuffer(const std::string& port) 
     const auto& r = mCompiled->resources[it->second];
     if (r.kind != ResourceKind::Buffer) return nullptr;
     return std::static_pointer_cast<gpu::Buffer>(mPhysical[r.physical]);
+}
+
+void RenderGraph::setAliasing(bool enabled) {
+    if (enabled == mAliasing) return;
+    mAliasing = enabled;
+    invalidate(enabled ? "aliasing enabled" : "aliasing disabled");
 }
 
 size_t RenderGraph::reloadShaders(ShaderLibrary& shaders) {

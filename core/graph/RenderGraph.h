@@ -49,6 +49,7 @@ struct CompiledGraph {
         int firstUse = 0, lastUse = 0;  // positions in `order`
         bool persistent = false;
         bool graphOutput = false;
+        int historyOf = -1;  // previous-frame copy of this resource index (feedback edges)
         int physical = -1;  // index into physical resources; equal index = aliased memory
     };
     std::vector<int> order;                // pass indices in execution order
@@ -149,8 +150,15 @@ public:
     uint64_t frameIndex() const { return mFrameIndex; }
     // Drop compiled state and persistent resources (logged); next execute recompiles.
     void invalidate(const std::string& reason);
+    // Passes see historyReset() on their next execution (persistent and previous-frame data
+    // are stale); nothing is reallocated.
+    void resetHistory();
     // Recompile passes whose shaders changed on disk (inspector hot reload).
     size_t reloadShaders(ShaderLibrary& shaders);
+    // Memory aliasing of transient resources (on by default). The inspector turns it off so
+    // every intermediate port stays readable after the frame; takes effect on the next compile.
+    void setAliasing(bool enabled);
+    bool aliasing() const { return mAliasing; }
 
 private:
     std::string where(const std::string& pointer) const;
@@ -177,6 +185,7 @@ private:
     std::vector<PassTiming> mTimings;
     double mFrameGpuMs = 0.0;
     uint64_t mFrameIndex = 0;
+    bool mAliasing = true;
 };
 
 }  // namespace loom

@@ -91,12 +91,23 @@ void Renderer::frame() {
     ++mFrames;
 }
 
+std::unique_ptr<RenderGraph> Renderer::setGraph(std::unique_ptr<RenderGraph> graph) {
+    if (!graph) throw UserError("setGraph: no graph");
+    mCompiler->addSearchPath(graph->sourceDir());
+    std::swap(mGraph, graph);
+    ++mExternalRevision;
+    return graph;
+}
+
 void Renderer::resize(uint32_t width, uint32_t height) {
     mWidth = width;
     mHeight = height;
 }
 
-void Renderer::reset() { ++mExternalRevision; }
+void Renderer::reset() {
+    ++mExternalRevision;
+    mGraph->resetHistory();
+}
 
 ImageData Renderer::readOutput(const std::string& port) {
     if (!mGraph->compiled()) frame();

@@ -57,6 +57,9 @@ public:
     void checkNaN();
 
     RenderGraph& graph() { return *mGraph; }
+    // Swaps in another graph (inspector hot reload) and returns the previous one, so a caller
+    // can swap it back when the new one fails to run.
+    std::unique_ptr<RenderGraph> setGraph(std::unique_ptr<RenderGraph> graph);
     gpu::Context& gpu() { return *mGpu; }
     ShaderLibrary& shaders() { return *mShaders; }
     uint32_t width() const { return mWidth; }

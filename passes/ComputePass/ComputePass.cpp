@@ -5,6 +5,7 @@
 #include <set>
 
 #include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
 
 namespace loom {
 
@@ -256,6 +257,8 @@ public:
         }
 
         gpu::Bindings b;
+        // Kernels may include lib/scene.glsl & co.: bind the scene when one is loaded.
+        if (ctx.hasScene()) ctx.scene().bind(b);
         for (auto* list : {&mInputs, &mOutputs}) {
             for (auto& p : *list) {
                 if (!ctx.has(p.port)) continue;

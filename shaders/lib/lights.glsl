@@ -74,6 +74,26 @@ vec3 environment_radiance(vec3 wi) {
     return l.p1.x * envmap_eval(l.index, wi);
 }
 
+// Incident radiance-equivalent (intensity / dist^2, spot falloff) at p from a point or spot
+// light, with the direction and distance to it.
+vec3 point_light_incident(LightGpu l, vec3 p, out vec3 wi, out float dist) {
+    vec3 d = l.p0.xyz - p;
+    float dist2 = dot(d, d);
+    dist = sqrt(dist2);
+    wi = d / dist;
+    vec3 Li = l.p1.rgb / dist2;
+    if (l.type == LIGHT_SPOT) {
+        // Mitsuba spot falloff: 1 inside the beam width, linear in angle to 0 at the cutoff.
+        float cos_t = dot(-wi, l.p2.xyz);
+        float cos_cutoff = l.p2.w, cos_beam = l.p0.w;
+        float cutoff = acos(cos_cutoff), beam = acos(cos_beam);
+        float fall = cos_t <= cos_cutoff ? 0.0 : cos_t >= cos_beam ? 1.0
+                   : (cutoff - acos(clamp(cos_t, -1.0, 1.0))) / max(cutoff - beam, 1e-6);
+        Li *= fall;
+    }
+    return Li;
+}
+
 LightSample sample_light(vec3 p, vec3 u) {
     LightSample ls;
     ls.pdf = 0.0;
@@ -118,20 +138,7 @@ LightSample sample_light(vec3 p, vec3 u) {
         SurfacePoint sp = surface_point(l.index, vec2(0.0));
         ls.Li = emitted_radiance(sp.shape, sp.ng, ls.wi);
     } else if (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) {
-        vec3 d = l.p0.xyz - p;
-        float dist2 = dot(d, d);
-        ls.dist = sqrt(dist2);
-        ls.wi = d / ls.dist;
-        ls.Li = l.p1.rgb / dist2;
-        if (l.type == LIGHT_SPOT) {
-            // Mitsuba spot falloff: 1 inside the beam width, linear in angle to 0 at the cutoff.
-            float cos_t = dot(-ls.wi, l.p2.xyz);
-            float cos_cutoff = l.p2.w, cos_beam = l.p0.w;
-            float cutoff = acos(cos_cutoff), beam = acos(cos_beam);
-            float fall = cos_t <= cos_cutoff ? 0.0 : cos_t >= cos_beam ? 1.0
-                       : (cutoff - acos(clamp(cos_t, -1.0, 1.0))) / max(cutoff - beam, 1e-6);
-            ls.Li *= fall;
-        }
+        ls.Li = point_light_incident(l, p, ls.wi, ls.dist);
         ls.pdf = l.pmf;
         ls.is_delta = true;
     } else if (l.type == LIGHT_DIRECTIONAL) {

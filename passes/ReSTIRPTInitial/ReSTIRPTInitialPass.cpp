@@ -1,0 +1,74 @@
+// ReSTIRPTInitial: initial path candidates of ReSTIR PT (Lin et al. 2022). See README.md.
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+#include "passes/ReSTIRPTInitial/PathReservoir.h"
+
+namespace loom {
+
+class ReSTIRPTInitialPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputTexture("vbuffer", gpu::Format::RGBA32UI).doc("GBuffer.vbuffer: primary hits");
+        r.inputTexture("sample", gpu::Format::RGBA32F).doc("GBuffer.sample: film and lens sample");
+        r.outputBuffer("reservoirs")
+            .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
+            .doc("path reservoirs (settings header + one PathReservoir per pixel)");
+        r.outputBuffer("primary")
+            .bytesPerPixel(restir::kPrimaryHitBytes)
+            .doc("per-pixel primary hit (camera vertex + triangle/barycentrics)");
+        r.param("candidates", 1).range(1, 64).doc("paths per pixel resampled into the reservoir");
+        r.param("maxBounces", 9).range(1, 15).doc("scattering events per path (PathTracer's)");
+        r.paramEnum("shift", "hybrid", {"hybrid", "reconnection", "replay"})
+            .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
+        r.param("roughnessThreshold", 0.2).range(0, 1).doc(
+            "hybrid shift: both reconnection endpoints need microfacet alpha above this");
+        r.param("distanceThreshold", 0.1).min(0).doc(
+            "hybrid shift: minimum reconnection segment length (near-field distance)");
+        r.paramEnum("misHeuristic", "power", {"balance", "power"})
+            .doc("NEE/BSDF MIS inside a path, as PathTracer");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mPipeline = shaders.pipeline("passes/restir_pt/initial.comp");
+    }
+    void execute(ExecuteContext& ctx) override {
+        if (!mRayCounter) mRayCounter = ctx.gpu().createBuffer(16, "RayCounter");
+        ctx.cmd().fillBuffer(*mRayCounter, 0);
+        ctx.cmd().barrier();
+        gpu::Bindings b;
+        ctx.scene().bind(b);
+        b.set("vbufferImage", ctx.texture("vbuffer"))
+            .set("sampleImage", ctx.texture("sample"))
+            .set("ReservoirsOut", ctx.buffer("reservoirs"))
+            .set("PrimaryOut", ctx.buffer("primary"))
+            .set("RayCounter", mRayCounter);
+        std::string shift = param<std::string>("shift");
+        gpu::PushConstants pc(*mPipeline);
+        uint32_t size[2] = {ctx.width(), ctx.height()};
+        pc.setUints("frameSize", size, 2)
+            .set("frameIndex", uint32_t(ctx.frameIndex()))
+            .set("seed", ctx.seed())
+            .set("candidates", uint32_t(param<int>("candidates")))
+            .set("maxBounces", uint32_t(param<int>("maxBounces")))
+            .set("shift", uint32_t(shift == "hybrid" ? 0 : shift == "reconnection" ? 1 : 2))
+            .set("roughThreshold", float(param<double>("roughnessThreshold")))
+            .set("distThreshold", float(param<double>("distanceThreshold")))
+            .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"));
+        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+    }
+    void frameCompleted(gpu::Context& gpu) override {
+        uint32_t rays = 0;
+        if (mRayCounter) gpu.downloadBuffer(*mRayCounter, &rays, sizeof(rays));
+        mRays = rays;
+    }
+    std::map<std::string, double> stats() const override { return {{"rays", double(mRays)}}; }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mPipeline;
+    std::shared_ptr<gpu::Buffer> mRayCounter;
+    uint64_t mRays = 0;
+};
+
+LOOM_REGISTER_PASS(ReSTIRPTInitialPass, "ReSTIRPTInitial",
+                   "ReSTIR PT initial candidates: path tree from the GBuffer, RIS into a path reservoir");
+
+}  // namespace loom

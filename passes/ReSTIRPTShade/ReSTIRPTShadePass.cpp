@@ -1,0 +1,37 @@
+// ReSTIRPTShade: the ReSTIR PT pixel estimate from the final path reservoirs. See README.md.
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+
+namespace loom {
+
+class ReSTIRPTShadePass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputBuffer("reservoirs").doc("final reservoirs");
+        r.inputBuffer("primary").doc("this frame's primary hits (ReSTIRPTInitial)");
+        r.outputTexture("color", gpu::Format::RGBA32F).doc("radiance: primary emission + F W");
+        r.param("emission", true).doc("add emission seen at the primary hit (and the environment)");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mPipeline = shaders.pipeline("passes/restir_pt/shade.comp");
+    }
+    void execute(ExecuteContext& ctx) override {
+        gpu::Bindings b;
+        ctx.scene().bind(b);
+        b.set("ReservoirsIn", ctx.buffer("reservoirs"))
+            .set("PrimaryIn", ctx.buffer("primary"))
+            .set("colorImage", ctx.texture("color"));
+        gpu::PushConstants pc(*mPipeline);
+        uint32_t size[2] = {ctx.width(), ctx.height()};
+        pc.setUints("frameSize", size, 2).set("emission", uint32_t(param<bool>("emission")));
+        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+    }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mPipeline;
+};
+
+LOOM_REGISTER_PASS(ReSTIRPTShadePass, "ReSTIRPTShade",
+                   "ReSTIR PT final shading: primary emission + reservoir estimate F W");
+
+}  // namespace loom

@@ -1,0 +1,72 @@
+// ReSTIRPTSpatial: spatial path reuse of ReSTIR PT (Lin et al. 2022). See README.md.
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+#include "passes/ReSTIRPTInitial/PathReservoir.h"
+
+namespace loom {
+
+class ReSTIRPTSpatialPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputBuffer("reservoirs").doc("reservoirs to reuse between (after temporal reuse)");
+        r.inputBuffer("primary").doc("this frame's primary hits (ReSTIRPTInitial)");
+        r.outputBuffer("reservoirsOut")
+            .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
+            .doc("reservoirs after the last spatial round");
+        r.param("neighbours", 3).range(1, 32).doc("neighbours per round");
+        r.param("radius", 20.0).min(1).doc("neighbour disk radius, pixels");
+        r.param("rounds", 1).range(1, 8).doc("spatial reuse rounds, each reading the previous");
+        r.param("normalThreshold", 0.5).range(-1, 1).doc("reject neighbours: normal cosine below");
+        r.param("depthThreshold", 0.1).min(0).doc("reject neighbours: relative depth above");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mPipeline = shaders.pipeline("passes/restir_pt/spatial.comp");
+    }
+    void execute(ExecuteContext& ctx) override {
+        int rounds = param<int>("rounds");
+        auto in = ctx.buffer("reservoirs"), out = ctx.buffer("reservoirsOut");
+        if (rounds > 1 && (!mScratch || mScratch->size() != out->size()))
+            mScratch = ctx.gpu().createBuffer(out->size(), "ReSTIRPTSpatial scratch");
+        auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
+        for (int round = 0; round < rounds; ++round) {
+            // Ping-pong so that the last round writes the output.
+            bool toOut = (rounds - 1 - round) % 2 == 0;
+            auto dst = toOut ? out : mScratch;
+            gpu::Bindings b;
+            ctx.scene().bind(b);
+            b.set("ReservoirsIn", in)
+                .set("ReservoirsOut", dst)
+                .set("PrimaryIn", ctx.buffer("primary"))
+                .set("RestirCounters", counters);
+            gpu::PushConstants pc(*mPipeline);
+            uint32_t size[2] = {ctx.width(), ctx.height()};
+            pc.setUints("frameSize", size, 2)
+                .set("frameIndex", uint32_t(ctx.frameIndex()))
+                .set("seed", ctx.seed())
+                .set("neighbours", uint32_t(param<int>("neighbours")))
+                .set("round", uint32_t(round))
+                .set("radius", float(param<double>("radius")))
+                .set("normalThreshold", float(param<double>("normalThreshold")))
+                .set("depthThreshold", float(param<double>("depthThreshold")));
+            ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+            ctx.cmd().barrier();
+            in = dst;
+        }
+    }
+    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
+    std::map<std::string, double> stats() const override {
+        std::map<std::string, double> s;
+        mCounters.addStats(s);
+        return s;
+    }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mPipeline;
+    std::shared_ptr<gpu::Buffer> mScratch;
+    restir::ShiftCounters mCounters;
+};
+
+LOOM_REGISTER_PASS(ReSTIRPTSpatialPass, "ReSTIRPTSpatial",
+                   "ReSTIR PT spatial reuse: shift neighbours' paths, defensive pairwise MIS");
+
+}  // namespace loom

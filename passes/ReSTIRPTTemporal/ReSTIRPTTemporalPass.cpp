@@ -1,0 +1,73 @@
+// ReSTIRPTTemporal: temporal path reuse of ReSTIR PT (Lin et al. 2022). See README.md.
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+#include "passes/ReSTIRPTInitial/PathReservoir.h"
+
+namespace loom {
+
+class ReSTIRPTTemporalPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputBuffer("reservoirs").doc("this frame's reservoirs (ReSTIRPTInitial)");
+        r.inputBuffer("primary").doc("this frame's primary hits (ReSTIRPTInitial)");
+        r.inputBuffer("prevReservoirs").previousFrame().doc(
+            "last frame's final reservoirs: connect the last reuse stage's output");
+        r.inputBuffer("prevPrimary").previousFrame().doc(
+            "last frame's primary hits: connect ReSTIRPTInitial.primary");
+        r.inputTexture("motion", gpu::Format::RG32F).doc("GBuffer.motion (pixels)");
+        r.outputBuffer("reservoirsOut")
+            .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
+            .doc("reservoirs after temporal reuse");
+        r.param("confidenceCap", 20.0).min(0).doc(
+            "history length: previous confidence clamped to cap x current (Lin et al. Sec. 7)");
+        r.param("normalThreshold", 0.5).range(-1, 1).doc("reject history: normal cosine below");
+        r.param("depthThreshold", 0.1).min(0).doc("reject history: relative depth difference above");
+        r.paramEnum("mis", "balance", {"balance", "uniform"}).doc(
+            "generalized balance heuristic (Talbot), or confidence weights over techniques that "
+            "can shift the sample (1/|Z|)");
+        r.param("countFailedShifts", false).doc(
+            "ablation, biased: with mis=uniform, count the history even when the current sample "
+            "cannot shift to it (the known darkening bug)");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mPipeline = shaders.pipeline("passes/restir_pt/temporal.comp");
+    }
+    void execute(ExecuteContext& ctx) override {
+        gpu::Bindings b;
+        ctx.scene().bind(b);
+        b.set("ReservoirsIn", ctx.buffer("reservoirs"))
+            .set("PrevReservoirs", ctx.buffer("prevReservoirs"))
+            .set("PrimaryIn", ctx.buffer("primary"))
+            .set("PrevPrimary", ctx.buffer("prevPrimary"))
+            .set("motionImage", ctx.texture("motion"))
+            .set("ReservoirsOut", ctx.buffer("reservoirsOut"))
+            .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
+        gpu::PushConstants pc(*mPipeline);
+        uint32_t size[2] = {ctx.width(), ctx.height()};
+        pc.setUints("frameSize", size, 2)
+            .set("frameIndex", uint32_t(ctx.frameIndex()))
+            .set("seed", ctx.seed())
+            .set("historyValid", uint32_t(!ctx.historyReset()))
+            .set("mis", uint32_t(param<std::string>("mis") == "uniform"))
+            .set("countFailedShifts", uint32_t(param<bool>("countFailedShifts")))
+            .set("confidenceCap", float(param<double>("confidenceCap")))
+            .set("normalThreshold", float(param<double>("normalThreshold")))
+            .set("depthThreshold", float(param<double>("depthThreshold")));
+        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+    }
+    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
+    std::map<std::string, double> stats() const override {
+        std::map<std::string, double> s;
+        mCounters.addStats(s);
+        return s;
+    }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mPipeline;
+    restir::ShiftCounters mCounters;
+};
+
+LOOM_REGISTER_PASS(ReSTIRPTTemporalPass, "ReSTIRPTTemporal",
+                   "ReSTIR PT temporal reuse: shift last frame's path, generalized balance MIS");
+
+}  // namespace loom

@@ -1,0 +1,466 @@
+// ReSTIR PT paths (Lin et al. 2022, Sec. 5-6): candidate generation along one path tree (every
+// NEE sample and every emitter hit is a candidate, resampled by streaming RIS), and the shift
+// of a stored path to another pixel's primary hit by random replay, reconnection or the hybrid
+// of both. Paths are the ones PathTracer samples (same NEE + BSDF MIS, same maximum length, no
+// Russian roulette), so the mean of a ReSTIR estimator equals the reference path tracer's.
+//
+// Reconnection vertex (hybrid shift, Lin et al. Sec. 6.2): the first x_k, k >= 2, such that
+// x_{k-1} and x_k are both rough (no delta lobe, alpha > rough_threshold; the last vertex of a
+// path counts as rough) and |x_k - x_{k-1}| >= dist_threshold. The offset path must pick the
+// same k (no earlier pair qualifies, y_{k-1} rough, segment long enough), else the shift is not
+// a bijection and is rejected.
+//
+// Measure: primary sample space for the replayed prefix (Jacobian 1), area at x_k (a fixed
+// point: Jacobian 1) and solid angle after it (directions fixed: Jacobian 1). The solid-angle
+// form of the same shift, reconnection_jacobian below times the prefix pdf ratio, is what one
+// multiplies by when storing the integrand in path space instead.
+#ifndef LOOM_RESTIR_PATH_SHIFT_GLSL
+#define LOOM_RESTIR_PATH_SHIFT_GLSL
+
+#include "lib/bsdf.glsl"
+#include "lib/color.glsl"
+#include "lib/lights.glsl"
+#include "lib/mis.glsl"
+#include "lib/restir/path_reservoir.glsl"
+#include "lib/shading.glsl"
+
+// Shift statistics (attempts / successes by kind), read back by the passes for Lua/inspector.
+layout(std430) buffer RestirCounters {
+    uint shift_attempts_reconnect;
+    uint shift_success_reconnect;
+    uint shift_attempts_replay;
+    uint shift_success_replay;
+};
+
+// Solid-angle Jacobian of reconnecting to x_k from a new predecessor (Lin et al. Eq. 17;
+// Kettunen et al. 2015): |d omega_y / d omega_x| = (cos_y / d_y^2) * (d_x^2 / cos_x), where
+// cos_* is the angle at x_k between its normal and the segment to the old (x) / new (y) vertex.
+float reconnection_jacobian(vec3 x_prev, vec3 y_prev, vec3 x_k, vec3 n_k) {
+    vec3 dx = x_prev - x_k, dy = y_prev - x_k;
+    float dx2 = dot(dx, dx), dy2 = dot(dy, dy);
+    float cos_x = abs(dot(n_k, dx)) * inversesqrt(dx2);
+    float cos_y = abs(dot(n_k, dy)) * inversesqrt(dy2);
+    return cos_x > 0.0 ? (cos_y / dy2) * (dx2 / cos_x) : 0.0;
+}
+
+// Primary-sample-space form: the reconnection direction's random numbers change with the
+// sampling pdfs at the new and old predecessor (and at x_k when the path continues past it).
+float reconnection_jacobian_pss(float J_solid, float pdf_y_prev, float pdf_x_prev, float pdf_y_k,
+                                float pdf_x_k) {
+    float den = pdf_x_prev * pdf_x_k;
+    return den > 0.0 ? J_solid * (pdf_y_prev * pdf_y_k) / den : 0.0;
+}
+
+// Vertex classification for the reconnection criteria.
+bool restir_vertex_rough(Material m, float threshold) {
+    uint flags = bsdf_flags(m);
+    if ((flags & BSDF_DELTA) != 0u || (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) return false;
+    return material_type(m) == MATERIAL_DIFFUSE || material_alpha(m) > threshold;
+}
+
+// Is (x_{k-1}, x_k) a reconnection pair under the settings' shift?
+bool restir_reconnectable(RestirSettings cfg, uint k, bool rough_prev, bool rough_k, float dist) {
+    if (cfg.shift == SHIFT_REPLAY) return false;
+    if (cfg.shift == SHIFT_RECONNECTION) return k == 2u && rough_prev && rough_k;
+    return rough_prev && rough_k && dist >= cfg.dist_threshold;
+}
+
+Rng restir_vertex_rng(uvec4 seed, uint j) {
+    Rng r = rng_from_seed(seed);
+    r.state.w = 4u * j;
+    return r;
+}
+
+ShadingPoint restir_primary_shading(PrimaryHit ph) {
+    Hit h;
+    h.t = 0.0;
+    h.prim = ph.hit.x;
+    h.bary = uintBitsToFloat(ph.hit.yz);
+    return shading_point(h);
+}
+
+vec2 triangle_barycentrics(uint prim, vec3 p) {
+    vec3 a, b, c;
+    triangle_positions(prim, a, b, c);
+    vec3 e1 = b - a, e2 = c - a, v = p - a;
+    float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+    float dv1 = dot(v, e1), dv2 = dot(v, e2);
+    float det = d11 * d22 - d12 * d12;
+    if (det == 0.0) return vec2(1.0 / 3.0);
+    return vec2(d22 * dv1 - d12 * dv2, d11 * dv2 - d12 * dv1) / det;
+}
+
+bool restir_visible(vec3 p, vec3 ng, vec3 dir, float dist) {
+    vec3 o = offset_ray_origin(p, ng, dir);
+    float tmax = dist < 1e29 ? dist * (1.0 - 1e-4) : 1e30;
+    return !trace_any(o, dir, 0.0, tmax, BVH_MASK_ALL);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Candidate generation: trace one path from the primary hit, streaming every NEE sample and every
+// emitter hit into r with resampling weight luminance(contribution) * inv_candidates (RIS with
+// target luminance(F); the contribution is F / p in the mixed measure).
+
+struct GenState {
+    uint k;           // reconnection index found so far (0 = none)
+    uint kind;
+    uint rc_id;
+    vec2 rc_bary;
+    vec3 rc_dir;      // omega_k once sampled
+    float p_mixed;    // density of x_k (area) times the suffix sampling pdfs so far
+    vec3 suffix_f;    // product of f at x_{k+1} .. x_{j-1}
+};
+
+void restir_stream_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, vec3 C,
+                             float p_mixed, float inv_candidates) {
+    float w = luminance(C) * inv_candidates;
+    vec3 F = C * p_mixed;
+    reservoir_add(r, s, F, luminance(F), w, rng_next(rng_sel));
+}
+
+// Returns the number of rays traced.
+uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, float inv_candidates,
+                     inout PathReservoir r, inout Rng rng_sel) {
+    uint rays = 0u;
+    if (!primary_valid(ph) || cfg.max_bounces == 0u) return rays;
+    ShadingPoint sh = restir_primary_shading(ph);
+    vec3 d = normalize(sh.sp.p - ph.camera.xyz);
+    vec3 beta = vec3(1.0);
+    GenState g;
+    g.k = 0u;
+    g.kind = RC_SURFACE;
+    g.rc_id = 0u;
+    g.rc_bary = vec2(0.0);
+    g.rc_dir = vec3(0.0);
+    g.p_mixed = 1.0;
+    g.suffix_f = vec3(1.0);
+    PathSample s;
+    s.seed = seed;
+    s.pad = 0.0;
+    for (uint j = 1u; j <= cfg.max_bounces; ++j) {
+        bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
+        vec3 wo = shading_to_local(sh, -d);
+        uint flags = bsdf_flags(sh.mat);
+        Rng rng = restir_vertex_rng(seed, j);
+        vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
+        vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+
+        // NEE candidate: the path x1 .. xj, light (n = j + 1).
+        if ((flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u) {
+            LightSample ls = sample_light(sh.sp.p, u_light);
+            if (ls.pdf > 0.0 && any(greaterThan(ls.Li, vec3(0.0)))) {
+                vec3 wi = shading_to_local(sh, ls.wi);
+                vec3 f = bsdf_eval(sh.mat, wo, wi);
+                ++rays;
+                if (any(greaterThan(f, vec3(0.0))) && restir_visible(sh.sp.p, sh.sp.ng, ls.wi, ls.dist)) {
+                    float bpdf = bsdf_pdf(sh.mat, wo, wi);
+                    float w = ls.is_delta ? 1.0 : mis_weight(ls.pdf, bpdf, cfg.mis_heuristic);
+                    vec3 C = beta * f * ls.Li * (w / ls.pdf);
+                    LightGpu l = scene_lights[ls.light];
+                    uint kind = l.type == LIGHT_TRIANGLE ? RC_SURFACE
+                              : (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) ? RC_POINT : RC_DIRECTION;
+                    s.light_pdf = ls.pdf;
+                    float p_mixed;
+                    if (g.k != 0u) {
+                        s.flags = path_pack_flags(j + 1u, g.k, true, g.kind, ls.is_delta);
+                        s.rc_id = g.rc_id;
+                        s.rc_bary = g.rc_bary;
+                        if (g.k == j) {
+                            s.rc_dir = ls.wi;
+                            s.rc_Lo = ls.Li;
+                        } else {
+                            s.rc_dir = g.rc_dir;
+                            s.rc_Lo = g.suffix_f * f * ls.Li * w;
+                        }
+                        p_mixed = g.p_mixed * ls.pdf;
+                    } else if (restir_reconnectable(cfg, j + 1u, rough_j, true, ls.dist)) {
+                        // The light vertex itself is the reconnection vertex.
+                        s.flags = path_pack_flags(j + 1u, j + 1u, true, kind, ls.is_delta);
+                        s.rc_id = kind == RC_SURFACE ? l.index : ls.light;
+                        s.rc_bary = kind == RC_SURFACE
+                                        ? triangle_barycentrics(l.index, sh.sp.p + ls.wi * ls.dist)
+                                        : vec2(0.0);
+                        s.rc_dir = ls.wi;
+                        s.rc_Lo = vec3(0.0);
+                        p_mixed = ls.pdf;
+                        if (kind == RC_SURFACE) {
+                            vec3 a, b, c;
+                            triangle_positions(l.index, a, b, c);
+                            float cos_l = abs(dot(normalize(cross(b - a, c - a)), ls.wi));
+                            p_mixed *= cos_l / (ls.dist * ls.dist);
+                        }
+                    } else {
+                        s.flags = path_pack_flags(j + 1u, 0u, true, RC_SURFACE, ls.is_delta);
+                        s.rc_id = 0u;
+                        s.rc_bary = vec2(0.0);
+                        s.rc_dir = vec3(0.0);
+                        s.rc_Lo = vec3(0.0);
+                        p_mixed = 1.0;
+                    }
+                    restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates);
+                }
+            }
+        }
+
+        // BSDF sampling towards x_{j+1}.
+        BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
+        if (!bsdf_sample_valid(bs)) break;
+        bool delta = (bs.flags & BSDF_DELTA) != 0u;
+        vec3 beta_next = beta * bsdf_sample_weight(bs);
+        vec3 dn = shading_to_world(sh, bs.wi);
+        vec3 o = offset_ray_origin(sh.sp.p, sh.sp.ng, dn);
+        Hit hit;
+        ++rays;
+        bool found = trace_closest(o, dn, 0.0, 1e30, BVH_MASK_ALL, hit);
+        ShadingPoint sn;
+        vec3 Le = vec3(0.0);
+        float light_pdf = 0.0;
+        float dist = 1e30, cos_next = 1.0;
+        if (found) {
+            sn = shading_point(hit);
+            dist = length(sn.sp.p - o);
+            cos_next = abs(dot(sn.sp.ng, dn));
+            if (any(greaterThan(sn.emission, vec3(0.0)))) {
+                Le = emitted_radiance(sn.sp.shape, sn.sp.ng, dn);
+                light_pdf = light_pdf_triangle(sh.sp.p, hit.prim, sn.sp.p, sn.sp.ng);
+            }
+        } else {
+            Le = environment_radiance(dn);
+            light_pdf = light_pdf_environment(dn);
+        }
+        // Emitter-hit candidate: the path x1 .. x_{j+1} (n = j + 1).
+        if (any(greaterThan(Le, vec3(0.0)))) {
+            float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
+            vec3 C = beta_next * Le * w;
+            s.light_pdf = light_pdf;
+            float p_mixed;
+            if (g.k != 0u) {
+                s.flags = path_pack_flags(j + 1u, g.k, false, g.kind, false);
+                s.rc_id = g.rc_id;
+                s.rc_bary = g.rc_bary;
+                if (g.k == j) {
+                    s.rc_dir = dn;
+                    s.rc_Lo = Le;
+                } else {
+                    s.rc_dir = g.rc_dir;
+                    s.rc_Lo = g.suffix_f * bs.f * Le * w;
+                }
+                p_mixed = g.p_mixed * bs.pdf;
+            } else if (!delta && restir_reconnectable(cfg, j + 1u, rough_j, true, dist)) {
+                uint kind = found ? RC_SURFACE : RC_DIRECTION;
+                s.flags = path_pack_flags(j + 1u, j + 1u, false, kind, false);
+                s.rc_id = found ? hit.prim : scene_info.counts.w;
+                s.rc_bary = found ? hit.bary : vec2(0.0);
+                s.rc_dir = dn;
+                s.rc_Lo = vec3(0.0);
+                p_mixed = bs.pdf * (found ? cos_next / (dist * dist) : 1.0);
+            } else {
+                s.flags = path_pack_flags(j + 1u, 0u, false, RC_SURFACE, false);
+                s.rc_id = 0u;
+                s.rc_bary = vec2(0.0);
+                s.rc_dir = vec3(0.0);
+                s.rc_Lo = vec3(0.0);
+                p_mixed = 1.0;
+            }
+            restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates);
+        }
+        if (!found || j == cfg.max_bounces) break;
+
+        // Advance the reconnection bookkeeping to x_{j+1}.
+        if (g.k != 0u) {
+            if (g.k == j) g.rc_dir = dn;
+            else g.suffix_f *= bs.f;
+            g.p_mixed *= bs.pdf;
+        } else if (!delta && restir_reconnectable(cfg, j + 1u, rough_j,
+                                                  restir_vertex_rough(sn.mat, cfg.rough_threshold), dist)) {
+            g.k = j + 1u;
+            g.kind = RC_SURFACE;
+            g.rc_id = hit.prim;
+            g.rc_bary = hit.bary;
+            g.p_mixed = bs.pdf * cos_next / (dist * dist);
+        }
+        beta = beta_next;
+        d = dn;
+        sh = sn;
+        if (all(equal(beta, vec3(0.0)))) break;
+    }
+    return rays;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shift: the integrand of sample s at another pixel's primary hit dst (0 when the shift fails).
+
+// MIS weight of the path's last vertex given the pdfs at its predecessor.
+float restir_last_mis(RestirSettings cfg, PathSample s, float light_pdf, float bsdf_pdf_) {
+    if (path_last_delta_light(s)) return 1.0;
+    return path_last_nee(s) ? mis_weight(light_pdf, bsdf_pdf_, cfg.mis_heuristic)
+                            : mis_weight(bsdf_pdf_, light_pdf, cfg.mis_heuristic);
+}
+
+// Reconnect y (the offset path's x_{k-1}, shading point sy, incoming direction d) to the stored
+// x_k and evaluate everything from y on. beta = prefix throughput (f/p) up to y.
+vec3 restir_reconnect(RestirSettings cfg, PathSample s, ShadingPoint sy, vec3 d, vec3 beta,
+                      inout uint rays) {
+    uint n = path_length(s), k = path_rc_index(s);
+    vec3 wo = shading_to_local(sy, -d);
+    uint kind = path_rc_kind(s);
+    vec3 dir;
+    float dist;
+    vec3 G_Le;   // k == n: what the light contributes to the segment (Le * G or intensity / d^2)
+    float light_pdf = 0.0;
+    ShadingPoint sk;
+    if (kind == RC_SURFACE) {
+        Hit h;
+        h.t = 0.0;
+        h.prim = s.rc_id;
+        h.bary = s.rc_bary;
+        sk = shading_point(h);
+        // Same segment geometry as the sampler: BSDF rays leave from the offset origin, light
+        // samples from the surface point itself.
+        vec3 o = sy.sp.p;
+        if (!(k == n && path_last_nee(s)))
+            o = offset_ray_origin(sy.sp.p, sy.sp.ng, normalize(sk.sp.p - sy.sp.p));
+        vec3 v = sk.sp.p - o;
+        dist = length(v);
+        dir = v / dist;
+        if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return vec3(0.0);
+        float G = abs(dot(sk.sp.ng, dir)) / (dist * dist);
+        if (k == n) {
+            G_Le = emitted_radiance(sk.sp.shape, sk.sp.ng, dir) * G;
+            light_pdf = light_pdf_triangle(sy.sp.p, s.rc_id, sk.sp.p, sk.sp.ng);
+        } else {
+            G_Le = vec3(G);
+        }
+    } else if (kind == RC_DIRECTION) {
+        dir = s.rc_dir;
+        dist = 1e30;
+        LightGpu l = scene_lights[s.rc_id];
+        if (l.type == LIGHT_DIRECTIONAL) {
+            G_Le = l.p1.rgb;
+        } else {
+            G_Le = environment_radiance(dir);
+            light_pdf = light_pdf_environment(dir);
+        }
+    } else {
+        LightGpu l = scene_lights[s.rc_id];
+        G_Le = point_light_incident(l, sy.sp.p, dir, dist);
+        if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return vec3(0.0);
+    }
+    vec3 wi = shading_to_local(sy, dir);
+    vec3 f = bsdf_eval(sy.mat, wo, wi);
+    if (all(equal(f, vec3(0.0))) || all(equal(G_Le, vec3(0.0)))) return vec3(0.0);
+    ++rays;
+    if (!restir_visible(sy.sp.p, sy.sp.ng, dir, kind == RC_SURFACE ? dist * (1.0 - 1e-3) : dist))
+        return vec3(0.0);
+    if (k == n) {
+        float w = restir_last_mis(cfg, s, light_pdf, bsdf_pdf(sy.mat, wo, wi));
+        return beta * f * G_Le * w;
+    }
+    // x_k scatters towards the stored direction; re-evaluate its BSDF (and the last MIS weight
+    // when the next vertex is the last one) for the new incoming direction.
+    vec3 wo_k = shading_to_local(sk, -dir);
+    vec3 wi_k = shading_to_local(sk, s.rc_dir);
+    vec3 f_k = bsdf_eval(sk.mat, wo_k, wi_k);
+    float w = k + 1u == n ? restir_last_mis(cfg, s, s.light_pdf, bsdf_pdf(sk.mat, wo_k, wi_k)) : 1.0;
+    return beta * f * G_Le * f_k * s.rc_Lo * w;
+}
+
+vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
+    uint n = path_length(s), k = path_rc_index(s);
+    if (n < 2u || !primary_valid(dst)) return vec3(0.0);
+    bool reconnect = k != 0u;
+    if (reconnect) atomicAdd(shift_attempts_reconnect, 1u);
+    else atomicAdd(shift_attempts_replay, 1u);
+    if (!reconnect && cfg.shift == SHIFT_RECONNECTION) return vec3(0.0);
+    uint rays = 0u;
+    ShadingPoint sh = restir_primary_shading(dst);
+    vec3 d = normalize(sh.sp.p - dst.camera.xyz);
+    vec3 beta = vec3(1.0);
+    uint last_replayed = reconnect ? k - 1u : n - 1u;
+    vec3 result = vec3(0.0);
+    for (uint j = 1u;; ++j) {
+        bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
+        if (j == last_replayed) {
+            if (reconnect) {
+                if (!restir_reconnectable(cfg, k, rough_j, true, 1e30)) break;
+                result = restir_reconnect(cfg, s, sh, d, beta, rays);
+                break;
+            }
+            // Pure replay: the last vertex is the NEE sample or the BSDF sample of x_{n-1}.
+            vec3 wo = shading_to_local(sh, -d);
+            Rng rng = restir_vertex_rng(s.seed, j);
+            vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
+            vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+            if (path_last_nee(s)) {
+                if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
+                LightSample ls = sample_light(sh.sp.p, u_light);
+                if (!(ls.pdf > 0.0)) break;
+                if (restir_reconnectable(cfg, n, rough_j, true, ls.dist)) break;  // not invertible
+                vec3 wi = shading_to_local(sh, ls.wi);
+                vec3 f = bsdf_eval(sh.mat, wo, wi);
+                if (all(equal(f, vec3(0.0))) || all(equal(ls.Li, vec3(0.0)))) break;
+                ++rays;
+                if (!restir_visible(sh.sp.p, sh.sp.ng, ls.wi, ls.dist)) break;
+                float w = ls.is_delta ? 1.0
+                                      : mis_weight(ls.pdf, bsdf_pdf(sh.mat, wo, wi), cfg.mis_heuristic);
+                result = beta * f * ls.Li * (w / ls.pdf);
+            } else {
+                BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
+                if (!bsdf_sample_valid(bs)) break;
+                bool delta = (bs.flags & BSDF_DELTA) != 0u;
+                vec3 dn = shading_to_world(sh, bs.wi);
+                Hit hit;
+                ++rays;
+                bool found = trace_closest(offset_ray_origin(sh.sp.p, sh.sp.ng, dn), dn, 0.0, 1e30,
+                                           BVH_MASK_ALL, hit);
+                vec3 Le;
+                float light_pdf, dist = 1e30;
+                if (found) {
+                    ShadingPoint sn = shading_point(hit);
+                    dist = length(sn.sp.p - offset_ray_origin(sh.sp.p, sh.sp.ng, dn));
+                    Le = any(greaterThan(sn.emission, vec3(0.0)))
+                             ? emitted_radiance(sn.sp.shape, sn.sp.ng, dn) : vec3(0.0);
+                    light_pdf = light_pdf_triangle(sh.sp.p, hit.prim, sn.sp.p, sn.sp.ng);
+                } else {
+                    Le = environment_radiance(dn);
+                    light_pdf = light_pdf_environment(dn);
+                }
+                if (!delta && restir_reconnectable(cfg, n, rough_j, true, dist)) break;
+                float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
+                result = beta * bsdf_sample_weight(bs) * Le * w;
+            }
+            break;
+        }
+        // Replay the BSDF sample of x_j towards y_{j+1}.
+        vec3 wo = shading_to_local(sh, -d);
+        Rng rng = restir_vertex_rng(s.seed, j);
+        rng_next2(rng);
+        rng_next(rng);
+        vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+        BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
+        if (!bsdf_sample_valid(bs)) break;
+        bool delta = (bs.flags & BSDF_DELTA) != 0u;
+        vec3 dn = shading_to_world(sh, bs.wi);
+        Hit hit;
+        ++rays;
+        if (!trace_closest(offset_ray_origin(sh.sp.p, sh.sp.ng, dn), dn, 0.0, 1e30, BVH_MASK_ALL, hit))
+            break;
+        ShadingPoint sn = shading_point(hit);
+        // The offset path must not find an earlier reconnection vertex than the base path.
+        if (!delta && restir_reconnectable(cfg, j + 1u, rough_j,
+                                           restir_vertex_rough(sn.mat, cfg.rough_threshold),
+                                           length(sn.sp.p - offset_ray_origin(sh.sp.p, sh.sp.ng, dn))))
+            break;
+        beta *= bsdf_sample_weight(bs);
+        d = dn;
+        sh = sn;
+    }
+    bool ok = any(greaterThan(result, vec3(0.0))) && !any(isnan(result)) && !any(isinf(result));
+    if (ok) {
+        if (reconnect) atomicAdd(shift_success_reconnect, 1u);
+        else atomicAdd(shift_success_replay, 1u);
+    }
+    return ok ? result : vec3(0.0);
+}
+
+#endif

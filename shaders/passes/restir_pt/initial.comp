@@ -1,0 +1,70 @@
+#version 460
+// ReSTIR PT initial candidates (Lin et al. 2022, Sec. 5): per pixel, `candidates` paths from
+// the GBuffer's primary hit, every NEE sample and emitter hit streamed into one path reservoir
+// by RIS with the luminance target. Also writes the pixel's primary hit for later shifts.
+#include "lib/camera.glsl"
+#include "lib/restir/path_shift.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32ui) uniform readonly uimage2D vbufferImage;
+layout(rgba32f) uniform readonly image2D sampleImage;  // subpixel xy, lens uv (GBuffer)
+layout(std430) writeonly buffer ReservoirsOut {
+    RestirSettings settings_out;
+    PathReservoir reservoirs_out[];
+};
+layout(std430) writeonly buffer PrimaryOut { PrimaryHit primary_out[]; };
+layout(std430) buffer RayCounter { uint ray_count; };
+
+layout(push_constant) uniform Params {
+    uvec2 frameSize;
+    uint frameIndex;
+    uint seed;
+    uint candidates;
+    uint maxBounces;
+    uint shift;
+    float roughThreshold;
+    float distThreshold;
+    uint misHeuristic;
+} pc;
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, pc.frameSize))) return;
+    uint idx = pixel.y * pc.frameSize.x + pixel.x;
+    RestirSettings cfg;
+    cfg.max_bounces = pc.maxBounces;
+    cfg.shift = pc.shift;
+    cfg.rough_threshold = pc.roughThreshold;
+    cfg.dist_threshold = pc.distThreshold;
+    cfg.frame_size = pc.frameSize;
+    cfg.mis_heuristic = pc.misHeuristic;
+    cfg.pad = 0u;
+    if (idx == 0u) settings_out = cfg;
+
+    // The camera vertex of the GBuffer's primary ray (same film and lens sample, shutter open).
+    vec4 smp = imageLoad(sampleImage, ivec2(pixel));
+    CameraFrame cam = camera_frame(scene_info.camera_open, scene_info.camera_close, 0.0);
+    vec3 o, d;
+    camera_ray(cam, (vec2(pixel) + smp.xy) / vec2(pc.frameSize), smp.zw, o, d);
+    uvec4 v = imageLoad(vbufferImage, ivec2(pixel));
+    PrimaryHit ph;
+    ph.camera = vec4(o, 1.0);
+    // A miss keeps the ray direction so shading can look up the environment.
+    ph.hit = v.x == ~0u ? uvec4(~0u, floatBitsToUint(d)) : uvec4(v.xyz, 0u);
+    primary_out[idx] = ph;
+
+    PathReservoir r = reservoir_empty();
+    Rng rng_sel = rng_init(pixel, pc.frameIndex, pc.seed ^ 0xA511E9B3u);
+    uint rays = 0u;
+    if (primary_valid(ph)) {
+        float inv = 1.0 / float(pc.candidates);
+        for (uint c = 0u; c < pc.candidates; ++c) {
+            uvec4 seed = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x9E3779B1u * (c + 1u))).state;
+            rays += restir_generate(cfg, ph, seed, inv, r, rng_sel);
+        }
+        r.M = float(pc.candidates);
+    }
+    reservoir_finalize(r);
+    reservoirs_out[idx] = r;
+    atomicAdd(ray_count, rays);
+}

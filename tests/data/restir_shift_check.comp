@@ -1,0 +1,30 @@
+#version 460
+// Test kernel: shifts each pixel's initial path sample back to its own primary hit (must give
+// the stored integrand exactly: the generation and shift bookkeeping agree and the shift's
+// invertibility checks accept the identity) and to the right-hand neighbour.
+#include "lib/restir/path_shift.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(std430) readonly buffer ReservoirsIn {
+    RestirSettings settings_in;
+    PathReservoir reservoirs_in[];
+};
+layout(std430) readonly buffer PrimaryIn { PrimaryHit primary_in[]; };
+layout(rgba32f) uniform writeonly image2D checkImage;
+layout(push_constant) uniform Params { uvec2 frameSize; } pc;
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, pc.frameSize))) return;
+    uint idx = pixel.y * pc.frameSize.x + pixel.x;
+    PathReservoir r = reservoirs_in[idx];
+    vec4 out_value = vec4(0.0, 0.0, 0.0, -1.0);
+    if (r.W > 0.0) {
+        vec3 self_F = restir_shift(settings_in, r.s, primary_in[idx]);
+        uint right = pixel.y * pc.frameSize.x + min(pixel.x + 1u, pc.frameSize.x - 1u);
+        vec3 other_F = restir_shift(settings_in, r.s, primary_in[right]);
+        // x: stored target, y: target after the self shift, z: neighbour target, w: rc index.
+        out_value = vec4(r.target, luminance(self_F), luminance(other_F), float(path_rc_index(r.s)) + 16.0 * float(path_length(r.s)) + (path_last_nee(r.s) ? 256.0 : 0.0));
+    }
+    imageStore(checkImage, ivec2(pixel), out_value);
+}
