@@ -26,6 +26,9 @@ public:
             "hybrid shift: minimum reconnection segment length (near-field distance)");
         r.paramEnum("misHeuristic", "power", {"balance", "power"})
             .doc("NEE/BSDF MIS inside a path, as PathTracer");
+        r.paramEnum("reuse", "path", {"path", "area"})
+            .doc("path: the primary hit is fixed per pixel (ReSTIR PT); area: film and lens "
+                 "samples are part of the sample and are reused too (Area ReSTIR)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = shaders.pipeline("passes/restir_pt/initial.comp");
@@ -52,7 +55,8 @@ public:
             .set("shift", uint32_t(shift == "hybrid" ? 0 : shift == "reconnection" ? 1 : 2))
             .set("roughThreshold", float(param<double>("roughnessThreshold")))
             .set("distThreshold", float(param<double>("distanceThreshold")))
-            .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"));
+            .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
+            .set("area", uint32_t(param<std::string>("reuse") == "area"));
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override {

@@ -2,7 +2,7 @@
 // Test kernel: shifts each pixel's initial path sample back to its own primary hit (must give
 // the stored integrand exactly: the generation and shift bookkeeping agree and the shift's
 // invertibility checks accept the identity) and to the right-hand neighbour.
-#include "lib/restir/path_shift.glsl"
+#include "lib/restir/path_reuse.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430) readonly buffer ReservoirsIn {
@@ -20,9 +20,12 @@ void main() {
     PathReservoir r = reservoirs_in[idx];
     vec4 out_value = vec4(0.0, 0.0, 0.0, -1.0);
     if (r.W > 0.0) {
-        vec3 self_F = restir_shift(settings_in, r.s, primary_in[idx]);
-        uint right = pixel.y * pc.frameSize.x + min(pixel.x + 1u, pc.frameSize.x - 1u);
-        vec3 other_F = restir_shift(settings_in, r.s, primary_in[right]);
+        RestirSettings cfg = settings_in;
+        CameraPose pose = scene_info.camera_open;
+        vec3 self_F = restir_shift(cfg, r.s, restir_domain_primary(cfg, r.s, primary_in[idx], ivec2(pixel), pose));
+        ivec2 rp = ivec2(min(pixel.x + 1u, pc.frameSize.x - 1u), pixel.y);
+        uint right = uint(rp.y) * pc.frameSize.x + uint(rp.x);
+        vec3 other_F = restir_shift(cfg, r.s, restir_domain_primary(cfg, r.s, primary_in[right], rp, pose));
         // x: stored target, y: target after the self shift, z: neighbour target, w: rc index.
         out_value = vec4(r.target, luminance(self_F), luminance(other_F), float(path_rc_index(r.s)) + 16.0 * float(path_length(r.s)) + (path_last_nee(r.s) ? 256.0 : 0.0));
     }

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 
@@ -85,23 +86,30 @@ struct Comparison {
     double z = 0, restir = 0, reference = 0;
 };
 
-Comparison compareWithReference(const std::string& scene, const std::string& graphFile,
+Comparison compareWithReference(const scene::Scene& scene, const std::string& graphFile,
                                  const json& overrides, float dt, int size = 32,
                                  int sequences = 24, int frames = 8) {
     Comparison c;
     RegionStats restir(2), reference(2);
     {
         Renderer r(test::gpuContext(), restirGraph(graphFile, overrides), size, size, 1);
-        r.loadScene(scene);
+        r.setScene(scene);
         restir = sequenceStats(r, "shade.color", sequences, frames, dt);
     }
     {
         Renderer r(test::gpuContext(), ptGraph(8, 9), size, size, 2);
-        r.loadScene(scene);
+        r.setScene(scene);
         reference = sequenceStats(r, "pt.color", sequences, frames, dt);
     }
     c.z = maxZ(restir, reference, &c.restir, &c.reference);
+    std::printf("[ restir  ] %s %s: max |z| %.2f (%.5g vs %.5g)\n", graphFile.c_str(),
+                overrides.dump().c_str(), c.z, c.restir, c.reference);
     return c;
+}
+
+Comparison compareWithReference(const std::string& scenePath, const std::string& graphFile,
+                                 const json& overrides, float dt) {
+    return compareWithReference(scene::loadScene(scenePath), graphFile, overrides, dt);
 }
 
 }  // namespace
@@ -137,6 +145,27 @@ TEST(ReSTIRPT, UnbiasedEveryShiftAndAblation) {
     }
 }
 
+// Area ReSTIR: film and lens samples are part of the path sample and are replayed at the
+// destination pixel; unbiased with a static and a moving camera, with and without depth of field.
+TEST(AreaReSTIR, UnbiasedStaticAndMovingCamera) {
+    std::string scene = sourcePath("scenes/cornell_box.json");
+    for (float dt : {0.0f, 3.0f}) {
+        auto c = compareWithReference(scene, "area_restir.json", {}, dt);
+        EXPECT_LT(c.z, 3.0) << "dt " << dt << ": " << c.restir << " vs " << c.reference;
+    }
+}
+
+TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
+    scene::Scene s = scene::loadScene(sourcePath("scenes/cornell_box.json"));
+    s.camera.type = scene::CameraType::ThinLens;
+    s.camera.apertureRadius = 0.15f;
+    s.camera.focusDistance = 5.0f;  // focused on the back half of the box, front defocused
+    for (const char* graph : {"area_restir.json", "restir_pt.json"}) {
+        auto c = compareWithReference(s, graph, {}, 3.0f, 32, 24, 8);
+        EXPECT_LT(c.z, 3.0) << graph << ": " << c.restir << " vs " << c.reference;
+    }
+}
+
 // The known bias class: a history whose shift fails must not stay in the MIS denominator. The
 // correct confidence weights (1/|Z|) are unbiased; counting failed shifts darkens the image and
 // this comparison must see it (so the unbiasedness tests above can fail).
@@ -156,12 +185,13 @@ TEST(ReSTIRPT, FailedShiftInDenominatorIsDetected) {
 namespace {
 
 // GBuffer -> ReSTIRPTInitial -> tests/data/restir_shift_check.comp.
-std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift) {
+std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
+                                             const std::string& reuse = "path") {
     json g = {
         {"name", "restir_shift_check"},
         {"passes",
          {{{"name", "gbuffer"}, {"type", "GBuffer"}},
-          {{"name", "initial"}, {"type", "ReSTIRPTInitial"}, {"params", {{"shift", shift}}}},
+          {{"name", "initial"}, {"type", "ReSTIRPTInitial"}, {"params", {{"shift", shift}, {"reuse", reuse}}}},
           {{"name", "check"},
            {"type", "ComputePass"},
            {"params",
@@ -188,8 +218,10 @@ std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift) {
 // kind (reconnection at a surface, at a light, replay only); shifts to a neighbour mostly succeed.
 TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
     for (const char* scene : {"scenes/cornell_box.json", "scenes/glossy_spheres.json"}) {
-        for (const char* shift : {"hybrid", "reconnection", "replay"}) {
-            Renderer r(test::gpuContext(), shiftCheckGraph(shift), 48, 48, 3);
+        for (std::string shift : {"hybrid", "reconnection", "replay", "area"}) {
+            bool area = shift == "area";
+            if (area) shift = "hybrid";
+            Renderer r(test::gpuContext(), shiftCheckGraph(shift, area ? "area" : "path"), 48, 48, 3);
             r.loadScene(sourcePath(scene));
             int samples = 0, exact = 0, wrong = 0, reconnected = 0, neighbourOk = 0;
             for (int f = 0; f < 4; ++f) {
@@ -202,24 +234,24 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
                     // all (not even to their own pixel); the estimator gives them to the
                     // canonical sample.
                     int rc = int(p[3]) % 16;
-                    if (std::string(shift) == "reconnection" && rc == 0) continue;
+                    if (shift == "reconnection" && rc == 0) continue;
                     ++samples;
                     if (std::abs(p[1] - p[0]) <= 1e-3 * p[0]) ++exact;
                     if (std::abs(p[1] - p[0]) > 1e-2 * p[0] && ++wrong <= 5)
-                        ADD_FAILURE() << scene << " " << shift << ": stored " << p[0]
+                        ADD_FAILURE() << scene << " " << shift << (area ? " area" : "") << ": stored " << p[0]
                                       << " self-shift " << p[1] << " rc " << p[3];
                     if (rc > 0) ++reconnected;
                     if (p[2] > 0) ++neighbourOk;
                 }
             }
-            SCOPED_TRACE(std::string(scene) + " " + shift);
+            SCOPED_TRACE(std::string(scene) + " " + shift + (area ? " area" : ""));
             ASSERT_GT(samples, 1000);
             // Float round-off only: segments of near-zero length or grazing angles (the
             // reconnection shift has no distance threshold) may differ by a little.
             EXPECT_EQ(wrong, 0);
             EXPECT_GE(exact, samples * 0.995);
-            if (std::string(shift) == "replay") EXPECT_EQ(reconnected, 0);
-            if (std::string(shift) == "hybrid") EXPECT_GT(reconnected, samples / 2);
+            if (shift == "replay") EXPECT_EQ(reconnected, 0);
+            if (shift == "hybrid") EXPECT_GT(reconnected, samples / 2);
             EXPECT_GT(neighbourOk, samples / 4);
         }
     }

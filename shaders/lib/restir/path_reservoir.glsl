@@ -25,7 +25,7 @@ struct RestirSettings {
     float dist_threshold;    // hybrid shift: reconnection segment length >= this
     uvec2 frame_size;
     uint mis_heuristic;      // NEE/BSDF MIS inside a path (MIS_BALANCE / MIS_POWER)
-    uint pad;
+    uint area;               // Area ReSTIR: film and lens samples belong to the path sample
 };
 
 // A path x1 .. xn after the camera vertex x0 (x1 = the pixel's primary hit, n >= 2). Vertex xj
@@ -43,6 +43,7 @@ struct PathSample {
     float light_pdf;  // k == n-1: light-sampling pdf (solid angle at x_k) of x_n, for MIS
     vec3 rc_Lo;       // f products after x_k times Le (times the last MIS weight when k < n-1)
     float pad;
+    vec4 film_lens;   // Area ReSTIR: subpixel offset xy in [0,1)^2, lens sample zw
 };
 
 struct PathReservoir {
@@ -82,6 +83,7 @@ PathReservoir reservoir_empty() {
     r.s.light_pdf = 0.0;
     r.s.rc_Lo = vec3(0.0);
     r.s.pad = 0.0;
+    r.s.film_lens = vec4(0.5, 0.5, 0.5, 0.5);
     r.F = vec3(0.0);
     r.W = 0.0;
     r.M = 0.0;

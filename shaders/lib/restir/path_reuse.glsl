@@ -4,6 +4,7 @@
 #ifndef LOOM_RESTIR_PATH_REUSE_GLSL
 #define LOOM_RESTIR_PATH_REUSE_GLSL
 
+#include "lib/camera.glsl"
 #include "lib/restir/path_shift.glsl"
 
 // Geometric similarity of two primary hits (a technique-set choice, independent of samples, so
@@ -16,6 +17,26 @@ bool restir_similar(PrimaryHit a, PrimaryHit b, float normal_threshold, float de
     if (dot(sa.ns, sb.ns) < normal_threshold) return false;
     float da = length(sa.p - a.camera.xyz), db = length(sb.p - b.camera.xyz);
     return abs(da - db) <= depth_threshold * max(da, db);
+}
+
+// The primary hit a sample starts from in the domain of `pixel` seen by camera `pose`. ReSTIR PT:
+// the pixel's own primary hit. Area ReSTIR (Zhang et al. 2024, Sec. 4): the sample's film offset
+// and lens sample are copied to the destination pixel and the primary ray is traced again;
+// copying primary sample space coordinates has Jacobian 1 (box pixel filter, same lens).
+PrimaryHit restir_domain_primary(RestirSettings cfg, PathSample s, PrimaryHit pixel_hit,
+                                 ivec2 pixel, CameraPose pose) {
+    if (cfg.area == 0u) return pixel_hit;
+    CameraFrame cam = camera_frame(pose, pose, 0.0);
+    vec3 o, d;
+    camera_ray(cam, (vec2(pixel) + s.film_lens.xy) / vec2(cfg.frame_size), s.film_lens.zw, o, d);
+    PrimaryHit ph;
+    ph.camera = vec4(o, 1.0);
+    Hit hit;
+    if (trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit))
+        ph.hit = uvec4(hit.prim, floatBitsToUint(hit.bary), 0u);
+    else
+        ph.hit = uvec4(~0u, floatBitsToUint(d));
+    return ph;
 }
 
 // Two-technique generalized balance heuristic with confidences (Lin et al. Eq. 11 with M_i):

@@ -119,8 +119,8 @@ void restir_stream_candidate(inout PathReservoir r, inout Rng rng_sel, PathSampl
 }
 
 // Returns the number of rays traced.
-uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, float inv_candidates,
-                     inout PathReservoir r, inout Rng rng_sel) {
+uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_lens,
+                     float inv_candidates, inout PathReservoir r, inout Rng rng_sel) {
     uint rays = 0u;
     if (!primary_valid(ph) || cfg.max_bounces == 0u) return rays;
     ShadingPoint sh = restir_primary_shading(ph);
@@ -137,6 +137,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, float inv_ca
     PathSample s;
     s.seed = seed;
     s.pad = 0.0;
+    s.film_lens = film_lens;
     for (uint j = 1u; j <= cfg.max_bounces; ++j) {
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
         vec3 wo = shading_to_local(sh, -d);

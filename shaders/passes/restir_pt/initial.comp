@@ -1,7 +1,9 @@
 #version 460
 // ReSTIR PT initial candidates (Lin et al. 2022, Sec. 5): per pixel, `candidates` paths from
 // the GBuffer's primary hit, every NEE sample and emitter hit streamed into one path reservoir
-// by RIS with the luminance target. Also writes the pixel's primary hit for later shifts.
+// by RIS with the luminance target. Also writes the pixel's primary hit for later shifts. The
+// sample records the GBuffer's film and lens sample: with Area ReSTIR (Zhang et al. 2024) they
+// are part of the path and shifts replay them at the destination pixel.
 #include "lib/camera.glsl"
 #include "lib/restir/path_shift.glsl"
 
@@ -25,6 +27,7 @@ layout(push_constant) uniform Params {
     float roughThreshold;
     float distThreshold;
     uint misHeuristic;
+    uint area;
 } pc;
 
 void main() {
@@ -38,7 +41,7 @@ void main() {
     cfg.dist_threshold = pc.distThreshold;
     cfg.frame_size = pc.frameSize;
     cfg.mis_heuristic = pc.misHeuristic;
-    cfg.pad = 0u;
+    cfg.area = pc.area;
     if (idx == 0u) settings_out = cfg;
 
     // The camera vertex of the GBuffer's primary ray (same film and lens sample, shutter open).
@@ -60,7 +63,7 @@ void main() {
         float inv = 1.0 / float(pc.candidates);
         for (uint c = 0u; c < pc.candidates; ++c) {
             uvec4 seed = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x9E3779B1u * (c + 1u))).state;
-            rays += restir_generate(cfg, ph, seed, inv, r, rng_sel);
+            rays += restir_generate(cfg, ph, seed, smp, inv, r, rng_sel);
         }
         r.M = float(pc.candidates);
     }

@@ -55,8 +55,13 @@ void main() {
         if (!restir_similar(hc, hq, pc.normalThreshold, pc.depthThreshold)) continue;
         ++valid;
         PathReservoir rq = reservoirs_in[qi];
-        vec3 F_qc = rq.W > 0.0 ? restir_shift(cfg, rq.s, hc) : vec3(0.0);
-        vec3 F_cq = rc.W > 0.0 ? restir_shift(cfg, rc.s, hq) : vec3(0.0);
+        CameraPose pose = scene_info.camera_open;
+        vec3 F_qc = rq.W > 0.0
+            ? restir_shift(cfg, rq.s, restir_domain_primary(cfg, rq.s, hc, ivec2(pixel), pose))
+            : vec3(0.0);
+        vec3 F_cq = rc.W > 0.0
+            ? restir_shift(cfg, rc.s, restir_domain_primary(cfg, rc.s, hq, q, pose))
+            : vec3(0.0);
         float t_qc = luminance(F_qc), t_cq = luminance(F_cq);
         // Pair (canonical, q): q's share of its own shifted sample, and of the canonical one.
         float m_q = pairwise_neighbour_weight(rq.M, rq.target, rc.M, t_qc);

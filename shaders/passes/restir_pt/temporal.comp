@@ -65,8 +65,12 @@ void main() {
     float Mc = rc.M, Mp = min(rp.M, pc.confidenceCap * rc.M);
 
     // Y_p shifted here, and the canonical Y_c shifted to the previous pixel (for its weight).
-    vec3 F_pc = rp.W > 0.0 ? restir_shift(cfg, rp.s, hc) : vec3(0.0);
-    vec3 F_cp = rc.W > 0.0 ? restir_shift(cfg, rc.s, hp) : vec3(0.0);
+    vec3 F_pc = rp.W > 0.0
+        ? restir_shift(cfg, rp.s, restir_domain_primary(cfg, rp.s, hc, ivec2(pixel), scene_info.camera_open))
+        : vec3(0.0);
+    vec3 F_cp = rc.W > 0.0
+        ? restir_shift(cfg, rc.s, restir_domain_primary(cfg, rc.s, hp, q, scene_info.camera_prev))
+        : vec3(0.0);
     float t_pc = luminance(F_pc), t_cp = luminance(F_cp);
     float m_c, m_p;
     if (pc.mis == TEMPORAL_MIS_BALANCE) {
