@@ -11,7 +11,7 @@ PACKAGES=(
   libopenimageio-dev openimageio-tools
   libembree-dev
   liblua5.4-dev
-  libimgui-dev libglfw3-dev
+  libimgui-dev libglfw3-dev xvfb xauth
   libtinyobjloader-dev libtinygltf-dev libpugixml-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -30,13 +30,15 @@ const char* deviceTypeName(VkPhysicalDeviceType t) {
     }
 }
 
-VkInstance createInstance(bool validation, bool& validationOn) {
+VkInstance createInstance(bool validation, bool& validationOn,
+                          const std::vector<std::string>& extraExtensions = {}) {
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = "loom";
     app.pEngineName = "loom";
     app.apiVersion = VK_API_VERSION_1_3;
 
     std::vector<const char*> layers, extensions;
+    for (const auto& e : extraExtensions) extensions.push_back(e.c_str());
     validationOn = false;
     if (validation) {
         uint32_t n = 0;
@@ -398,7 +400,7 @@ void Context::init(const Options& options) {
     if (const char* v = std::getenv("LOOM_VALIDATION"); v && std::string(v) == "1")
         validation = true;
     bool validationOn = false;
-    mInstance = createInstance(validation, validationOn);
+    mInstance = createInstance(validation, validationOn, options.instanceExtensions);
     if (validationOn) {
         auto createMessenger = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
             vkGetInstanceProcAddr(mInstance, "vkCreateDebugUtilsMessengerEXT"));
@@ -419,6 +421,21 @@ void Context::init(const Options& options) {
         if (const char* d = std::getenv("LOOM_DEVICE")) selector = d;
     auto devs = physicalDevices(mInstance);
     if (devs.empty()) throw GpuError("no Vulkan device found (install mesa-vulkan-drivers)");
+    // The first queue family with compute (and, for presentation, graphics and the caller's
+    // test); -1 when the device has none.
+    auto queueFamilyOf = [&](VkPhysicalDevice pd) {
+        uint32_t nq = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(pd, &nq, nullptr);
+        std::vector<VkQueueFamilyProperties> qp(nq);
+        vkGetPhysicalDeviceQueueFamilyProperties(pd, &nq, qp.data());
+        VkQueueFlags need = VK_QUEUE_COMPUTE_BIT;
+        if (options.queueFamilyFilter) need |= VK_QUEUE_GRAPHICS_BIT;
+        for (uint32_t i = 0; i < nq; ++i)
+            if ((qp[i].queueFlags & need) == need &&
+                (!options.queueFamilyFilter || options.queueFamilyFilter(mInstance, pd, i)))
+                return int(i);
+        return -1;
+    };
     std::vector<DeviceInfo> infos;
     for (uint32_t i = 0; i < devs.size(); ++i) infos.push_back(describe(devs[i], i));
     int chosen = -1;
@@ -438,9 +455,12 @@ void Context::init(const Options& options) {
         }
     } else {
         for (uint32_t i = 0; i < infos.size() && chosen < 0; ++i)
-            if (infos[i].name.find("llvmpipe") != std::string::npos || infos[i].type == "cpu")
+            if ((infos[i].name.find("llvmpipe") != std::string::npos || infos[i].type == "cpu") &&
+                queueFamilyOf(devs[i]) >= 0)
                 chosen = int(i);
-        if (chosen < 0) chosen = 0;
+        for (uint32_t i = 0; i < infos.size() && chosen < 0; ++i)
+            if (queueFamilyOf(devs[i]) >= 0) chosen = int(i);
+        if (chosen < 0) chosen = 0;  // reported below as "no compute queue"
     }
     mPhysical = devs[chosen];
     mInfo = infos[chosen];
@@ -453,13 +473,11 @@ void Context::init(const Options& options) {
     vkGetPhysicalDeviceQueueFamilyProperties(mPhysical, &nq, nullptr);
     std::vector<VkQueueFamilyProperties> qprops(nq);
     vkGetPhysicalDeviceQueueFamilyProperties(mPhysical, &nq, qprops.data());
-    bool found = false;
-    for (uint32_t i = 0; i < nq && !found; ++i)
-        if (qprops[i].queueFlags & VK_QUEUE_COMPUTE_BIT) {
-            mQueueFamily = i;
-            found = true;
-        }
-    if (!found) throw GpuError("device '" + mInfo.name + "' has no compute queue");
+    int family = queueFamilyOf(mPhysical);
+    if (family < 0)
+        throw GpuError("device '" + mInfo.name + "' has no compute queue" +
+                       (options.queueFamilyFilter ? " that can also draw and present" : ""));
+    mQueueFamily = uint32_t(family);
     mTimestampsSupported = qprops[mQueueFamily].timestampValidBits > 0;
 
     // Features: enable what the passes use when the device has it.
@@ -491,6 +509,10 @@ void Context::init(const Options& options) {
     dci.pNext = &want;
     dci.queueCreateInfoCount = 1;
     dci.pQueueCreateInfos = &qci;
+    std::vector<const char*> deviceExtensions;
+    for (const auto& e : options.deviceExtensions) deviceExtensions.push_back(e.c_str());
+    dci.enabledExtensionCount = uint32_t(deviceExtensions.size());
+    dci.ppEnabledExtensionNames = deviceExtensions.data();
     check(vkCreateDevice(mPhysical, &dci, nullptr, &mDevice), "vkCreateDevice");
     vkGetDeviceQueue(mDevice, mQueueFamily, 0, &mQueue);
 
@@ -602,7 +624,7 @@ std::shared_ptr<Buffer> Context::createBuffer(VkDeviceSize size, const std::stri
 }
 
 std::shared_ptr<Image> Context::createImage(uint32_t width, uint32_t height, Format format,
-                                            const std::string& name) {
+                                            const std::string& name, VkImageUsageFlags extraUsage) {
     if (width == 0 || height == 0)
         throw GpuError(fmt::format("image '{}' has zero size {}x{}", name, width, height));
     auto img = std::shared_ptr<Image>(new Image());
@@ -620,7 +642,7 @@ std::shared_ptr<Image> Context::createImage(uint32_t width, uint32_t height, For
     ici.samples = VK_SAMPLE_COUNT_1_BIT;
     ici.tiling = VK_IMAGE_TILING_OPTIMAL;
     ici.usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
-                VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+                VK_IMAGE_USAGE_TRANSFER_DST_BIT | extraUsage;
     ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     check(vkCreateImage(mDevice, &ici, nullptr, &img->mImage), "vkCreateImage");
     VkMemoryRequirements req;

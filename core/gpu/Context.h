@@ -4,6 +4,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -161,6 +162,11 @@ public:
         std::string device;  // "" = default (LOOM_DEVICE, else lavapipe, else first device)
         bool validation = false;  // also enabled by LOOM_VALIDATION=1
         std::string cacheDir;     // "" = default cache directory (see shaderCacheDir())
+        // Presentation (the inspector): extra extensions, and a test the queue family must
+        // pass besides compute (e.g. glfwGetPhysicalDevicePresentationSupport). With a test
+        // the family must also support graphics, and only devices that have one are chosen.
+        std::vector<std::string> instanceExtensions, deviceExtensions;
+        std::function<bool(VkInstance, VkPhysicalDevice, uint32_t family)> queueFamilyFilter;
     };
     static std::shared_ptr<Context> create(const Options& options);
     static std::shared_ptr<Context> create() { return create(Options()); }
@@ -172,14 +178,20 @@ public:
     const DeviceInfo& deviceInfo() const { return mInfo; }
     VkDevice device() const { return mDevice; }
     VkPhysicalDevice physicalDevice() const { return mPhysical; }
+    VkInstance instance() const { return mInstance; }
+    VkQueue queue() const { return mQueue; }
+    uint32_t queueFamily() const { return mQueueFamily; }
+    VkPipelineCache pipelineCache() const { return mPipelineCache; }
     const std::string& cacheDir() const { return mCacheDir; }
     // Count of validation-layer errors reported so far (tests assert it stays 0).
     uint32_t validationErrors() const { return mValidationErrors; }
 
     std::shared_ptr<Buffer> createBuffer(VkDeviceSize size, const std::string& name,
                                          bool hostVisible = false);
+    // Images are storage + transfer images in GENERAL layout; extraUsage adds e.g. SAMPLED
+    // (the inspector samples its display images).
     std::shared_ptr<Image> createImage(uint32_t width, uint32_t height, Format format,
-                                       const std::string& name);
+                                       const std::string& name, VkImageUsageFlags extraUsage = 0);
     std::shared_ptr<ComputePipeline> createPipeline(const std::vector<uint32_t>& spirv,
                                                     const ShaderReflection& reflection,
                                                     const std::string& name);
