@@ -25,6 +25,10 @@ public:
         r.paramEnum("mis", "balance", {"balance", "uniform"}).doc(
             "generalized balance heuristic (Talbot), or confidence weights over techniques that "
             "can shift the sample (1/|Z|)");
+        r.paramEnum("areaReprojection", "fast", {"fast", "robust", "copy"})
+            .doc("Area ReSTIR only (initial.reuse = area): fractional motion vectors over the 2x2 "
+                 "previous pixels, resampled by previous targets then shifted (fast) or all "
+                 "shifted first (robust); copy = one previous pixel, subpixel offset copied");
         r.param("countFailedShifts", false).doc(
             "ablation, biased: with mis=uniform, count the history even when the current sample "
             "cannot shift to it (the known darkening bug)");
@@ -50,6 +54,7 @@ public:
             .set("historyValid", uint32_t(!ctx.historyReset()))
             .set("mis", uint32_t(param<std::string>("mis") == "uniform"))
             .set("countFailedShifts", uint32_t(param<bool>("countFailedShifts")))
+            .set("areaVariant", uint32_t(areaVariant()))
             .set("confidenceCap", float(param<double>("confidenceCap")))
             .set("normalThreshold", float(param<double>("normalThreshold")))
             .set("depthThreshold", float(param<double>("depthThreshold")));
@@ -63,6 +68,10 @@ public:
     }
 
 private:
+    int areaVariant() const {
+        std::string v = param<std::string>("areaReprojection");
+        return v == "fast" ? 0 : v == "robust" ? 1 : 2;
+    }
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
     restir::ShiftCounters mCounters;
 };

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 
@@ -86,9 +87,15 @@ struct Comparison {
     double z = 0, restir = 0, reference = 0;
 };
 
+// LOOM_RESTIR_SEQUENCES raises the sequence count for a deeper (slower) check than CI's.
+int defaultSequences() {
+    const char* e = std::getenv("LOOM_RESTIR_SEQUENCES");
+    return e ? std::max(4, std::atoi(e)) : 24;
+}
+
 Comparison compareWithReference(const scene::Scene& scene, const std::string& graphFile,
                                  const json& overrides, float dt, int size = 32,
-                                 int sequences = 24, int frames = 8) {
+                                 int sequences = defaultSequences(), int frames = 8) {
     Comparison c;
     RegionStats restir(2), reference(2);
     {
@@ -155,13 +162,23 @@ TEST(AreaReSTIR, UnbiasedStaticAndMovingCamera) {
     }
 }
 
+// Fractional motion vectors: both temporal variants and the integer/copy reprojection.
+TEST(AreaReSTIR, UnbiasedTemporalVariants) {
+    std::string scene = sourcePath("scenes/glossy_spheres.json");
+    for (const char* variant : {"fast", "robust", "copy"}) {
+        auto c = compareWithReference(scene, "area_restir.json",
+                                      {{"temporal.areaReprojection", variant}}, 2.0f);
+        EXPECT_LT(c.z, 3.0) << variant << ": " << c.restir << " vs " << c.reference;
+    }
+}
+
 TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
     scene::Scene s = scene::loadScene(sourcePath("scenes/cornell_box.json"));
     s.camera.type = scene::CameraType::ThinLens;
     s.camera.apertureRadius = 0.15f;
     s.camera.focusDistance = 5.0f;  // focused on the back half of the box, front defocused
     for (const char* graph : {"area_restir.json", "restir_pt.json"}) {
-        auto c = compareWithReference(s, graph, {}, 3.0f, 32, 24, 8);
+        auto c = compareWithReference(s, graph, {}, 3.0f);
         EXPECT_LT(c.z, 3.0) << graph << ": " << c.restir << " vs " << c.reference;
     }
 }
