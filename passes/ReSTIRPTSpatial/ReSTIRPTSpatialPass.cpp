@@ -18,6 +18,9 @@ public:
         r.param("rounds", 1).range(1, 8).doc("spatial reuse rounds, each reading the previous");
         r.param("normalThreshold", 0.5).range(-1, 1).doc("reject neighbours: normal cosine below");
         r.param("depthThreshold", 0.1).min(0).doc("reject neighbours: relative depth above");
+        r.paramEnum("dofShift", "both", {"both", "copy", "reconnect"})
+            .doc("Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
+                 "both combined by MIS (Zhang et al. 2024, Sec. 6)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = shaders.pipeline("passes/restir_pt/spatial.comp");
@@ -47,7 +50,8 @@ public:
                 .set("round", uint32_t(round))
                 .set("radius", float(param<double>("radius")))
                 .set("normalThreshold", float(param<double>("normalThreshold")))
-                .set("depthThreshold", float(param<double>("depthThreshold")));
+                .set("depthThreshold", float(param<double>("depthThreshold")))
+                .set("dofShifts", dofShifts());
             ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
             ctx.cmd().barrier();
             in = dst;
@@ -61,6 +65,10 @@ public:
     }
 
 private:
+    uint32_t dofShifts() const {
+        std::string v = param<std::string>("dofShift");
+        return v == "both" ? 3u : v == "copy" ? 1u : 2u;
+    }
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
     std::shared_ptr<gpu::Buffer> mScratch;
     restir::ShiftCounters mCounters;

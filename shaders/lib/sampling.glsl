@@ -35,6 +35,20 @@ vec2 sample_disk_concentric(vec2 u) {
     return r * vec2(cos(theta), sin(theta));
 }
 
+// Inverse of sample_disk_concentric: the u in [0,1)^2 that maps to p (|p| <= 1).
+vec2 disk_concentric_inverse(vec2 p) {
+    float r = length(p);
+    if (r == 0.0) return vec2(0.5);
+    float phi = atan(p.y, p.x);
+    if (phi < -PI / 4.0) phi += 2.0 * PI;
+    vec2 o;
+    if (phi < PI / 4.0) o = vec2(r, r * phi * (4.0 / PI));
+    else if (phi < 3.0 * PI / 4.0) o = vec2(r * (2.0 - phi * (4.0 / PI)), r);
+    else if (phi < 5.0 * PI / 4.0) o = vec2(-r, -r * (phi - PI) * (4.0 / PI));
+    else o = vec2(-r * (2.0 - (phi - PI) * (4.0 / PI)), -r);
+    return clamp(0.5 * (o + 1.0), vec2(0.0), vec2(1.0 - 1e-7));
+}
+
 // Cosine-weighted hemisphere around +z; pdf = cos(theta) / pi (solid angle).
 vec3 sample_cosine_hemisphere(vec2 u) {
     vec2 d = sample_disk_concentric(u);

@@ -39,6 +39,63 @@ PrimaryHit restir_domain_primary(RestirSettings cfg, PathSample s, PrimaryHit pi
     return ph;
 }
 
+// Thin-lens point on the focal plane seen through film position (pixel + offset).
+vec3 camera_focal_point(CameraFrame cam, vec2 film_uv) {
+    vec3 d = vec3((1.0 - 2.0 * film_uv.x) * cam.tan_half_fov.x,
+                  (1.0 - 2.0 * film_uv.y) * cam.tan_half_fov.y, 1.0) * cam.focus_distance;
+    return cam.origin + d.x * cam.right_axis + d.y * cam.up_axis + d.z * cam.forward;
+}
+
+// Area change of a central projection through P from a point a (normal n_a) to a point b
+// (normal n_b) on the same line: dA_b / dA_a = |b - P|^2 cos_a / (|a - P|^2 cos_b).
+float projection_area_ratio(vec3 P, vec3 a, vec3 n_a, vec3 b, vec3 n_b) {
+    vec3 dir = normalize(b - a);
+    float cos_a = abs(dot(n_a, dir)), cos_b = abs(dot(n_b, dir));
+    vec3 pa = a - P, pb = b - P;
+    float den = dot(pa, pa) * cos_b;
+    return den > 0.0 ? dot(pb, pb) * cos_a / den : 0.0;
+}
+
+// Primary-hit reconnection for depth of field (Zhang et al. 2024, Sec. 6): keep the sample's
+// primary hit x1, copy its film offset to dst_pixel, and pick the lens point whose ray through
+// that film position's focal point reaches x1. src: the sample's primary hit in its own domain
+// (camera = its lens point). J = |d lens_y / d lens_x| (lens area, = primary sample space: the
+// concentric mapping preserves area): lens_x -> x1 -> lens_y are two central projections
+// through the focal points P_x and P_y.
+bool restir_primary_reconnect(PathSample s, PrimaryHit src, ivec2 src_pixel, CameraPose src_pose,
+                              ivec2 dst_pixel, CameraPose dst_pose, uvec2 frame_size,
+                              out PathSample s_dst, out PrimaryHit dst, out float J) {
+    s_dst = s;
+    dst = src;
+    J = 0.0;
+    if (!primary_valid(src)) return false;
+    CameraFrame cx = camera_frame(src_pose, src_pose, 0.0);
+    CameraFrame cy = camera_frame(dst_pose, dst_pose, 0.0);
+    if (cy.aperture <= 0.0 || cx.aperture <= 0.0) return false;
+    SurfacePoint x1 = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
+    vec3 Px = camera_focal_point(cx, (vec2(src_pixel) + s.film_lens.xy) / vec2(frame_size));
+    vec3 Py = camera_focal_point(cy, (vec2(dst_pixel) + s.film_lens.xy) / vec2(frame_size));
+    // Line Py -> x1 meets the lens plane (camera z = 0).
+    vec3 P = Py - cy.origin, X = x1.p - cy.origin;
+    vec3 Pc = vec3(dot(P, cy.right_axis), dot(P, cy.up_axis), dot(P, cy.forward));
+    vec3 Xc = vec3(dot(X, cy.right_axis), dot(X, cy.up_axis), dot(X, cy.forward));
+    if (abs(Xc.z - Pc.z) < 1e-12) return false;
+    vec3 Lc = Pc + (Xc - Pc) * (-Pc.z / (Xc.z - Pc.z));
+    vec2 lens = Lc.xy / cy.aperture;
+    if (dot(lens, lens) >= 1.0) return false;
+    s_dst.film_lens.zw = disk_concentric_inverse(lens);
+    vec3 Ly = cy.origin + Lc.x * cy.right_axis + Lc.y * cy.up_axis;
+    // The new primary segment must be unoccluded.
+    vec3 v = x1.p - Ly;
+    float dist = length(v);
+    if (trace_any(Ly, v / dist, 0.0, dist * (1.0 - 1e-3), BVH_MASK_ALL)) return false;
+    vec3 Lx = src.camera.xyz;
+    J = projection_area_ratio(Px, Lx, cx.forward, x1.p, x1.ng) *
+        projection_area_ratio(Py, x1.p, x1.ng, Ly, cy.forward);
+    dst.camera = vec4(Ly, 1.0);
+    return J > 0.0 && !isinf(J);
+}
+
 // Two-technique generalized balance heuristic with confidences (Lin et al. Eq. 11 with M_i):
 // weight of technique a for a sample whose targets are t_a (own) and t_b (shifted to b).
 float mis_balance2(float M_a, float t_a, float M_b, float t_b) {
