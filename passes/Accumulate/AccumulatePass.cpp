@@ -35,16 +35,15 @@ public:
             .set("m2Image", ctx.persistentTexture("m2"))
             .set("outputImage", ctx.texture("output"));
         if (variance) b.set("varianceImage", variance);
-        if (frozen) {
-            // Keep the converged mean: copy instead of adding more frames.
-            ctx.cmd().copyImage(*ctx.persistentTexture("mean"), *ctx.texture("output"));
-            return;
-        }
+        // Frozen (maxFrames reached): the kernel reports the converged mean and variance.
         gpu::PushConstants pc(pipeline);
         uint32_t size[2] = {ctx.width(), ctx.height()};
-        pc.setUints("frameSize", size, 2).set("count", mCount).set("accumulate", uint32_t(enabled));
+        pc.setUints("frameSize", size, 2)
+            .set("count", mCount)
+            .set("accumulate", uint32_t(enabled))
+            .set("frozen", uint32_t(frozen));
         ctx.cmd().dispatchThreads(pipeline, b, &pc, ctx.width(), ctx.height());
-        if (enabled) ++mCount;
+        if (enabled && !frozen) ++mCount;
     }
     std::map<std::string, double> stats() const override { return {{"frames", double(mCount)}}; }
 

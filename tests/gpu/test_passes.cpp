@@ -458,6 +458,8 @@ TEST(PassesGpu, AccumulateMaxFramesFreezesTheMean) {
     for (int i = 0; i < 5; ++i) r->frame();
     Expected e = cpuAccumulate(9, 4, {0, 1, 2}, 0.0f);
     expectNear(r->readOutput("acc.output"), e.mean, 1e-4, "frozen mean");
+    // The variance of the frozen frames is still reported (it used to go stale).
+    expectNear(r->readOutput("acc.variance"), e.variance, 1e-4, "frozen variance");
     EXPECT_EQ(r->graph().findPass("acc")->stats().at("frames"), 3.0);
 
     // Disabled: the input passes through.

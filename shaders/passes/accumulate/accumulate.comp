@@ -12,24 +12,31 @@ layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint count;       // frames already in the mean (0 = reset)
     uint accumulate;  // 0: pass the input through (still reporting count 1)
+    uint frozen;      // maxFrames reached: report the stored mean and variance unchanged
 } pc;
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(uvec2(p), pc.frameSize))) return;
-    vec4 x = imageLoad(inputImage, p);
     vec4 mean = vec4(0.0), m2 = vec4(0.0);
     float n = 1.0;
-    if (pc.accumulate != 0u && pc.count > 0u) {
+    if (pc.frozen != 0u) {
         mean = imageLoad(meanImage, p);
         m2 = imageLoad(m2Image, p);
-        n = float(pc.count) + 1.0;
+        n = float(pc.count);
+    } else {
+        vec4 x = imageLoad(inputImage, p);
+        if (pc.accumulate != 0u && pc.count > 0u) {
+            mean = imageLoad(meanImage, p);
+            m2 = imageLoad(m2Image, p);
+            n = float(pc.count) + 1.0;
+        }
+        vec4 delta = x - mean;
+        mean += delta / n;
+        m2 += delta * (x - mean);
+        imageStore(meanImage, p, mean);
+        imageStore(m2Image, p, m2);
     }
-    vec4 delta = x - mean;
-    mean += delta / n;
-    m2 += delta * (x - mean);
-    imageStore(meanImage, p, mean);
-    imageStore(m2Image, p, m2);
     imageStore(outputImage, p, mean);
 #if HAS_VARIANCE
     vec3 variance = n > 1.0 ? m2.rgb / (n - 1.0) : vec3(0.0);
