@@ -18,6 +18,9 @@ public:
         r.param("rounds", 1).range(1, 8).doc("spatial reuse rounds, each reading the previous");
         r.param("normalThreshold", 0.5).range(-1, 1).doc("reject neighbours: normal cosine below");
         r.param("depthThreshold", 0.1).min(0).doc("reject neighbours: relative depth above");
+        r.paramEnum("mis", "defensivePairwise", {"defensivePairwise", "pairwise", "balance"})
+            .doc("resampling MIS: defensive pairwise (default), pairwise, or the generalized "
+                 "balance heuristic over all techniques (k^2 + k shifts, copy shift only)");
         r.paramEnum("dofShift", "both", {"both", "copy", "reconnect"})
             .doc("Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
                  "both combined by MIS (Zhang et al. 2024, Sec. 6)");
@@ -51,7 +54,8 @@ public:
                 .set("radius", float(param<double>("radius")))
                 .set("normalThreshold", float(param<double>("normalThreshold")))
                 .set("depthThreshold", float(param<double>("depthThreshold")))
-                .set("dofShifts", dofShifts());
+                .set("dofShifts", dofShifts())
+                .set("mis", misMode());
             ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
             ctx.cmd().barrier();
             in = dst;
@@ -65,6 +69,10 @@ public:
     }
 
 private:
+    uint32_t misMode() const {
+        std::string v = param<std::string>("mis");
+        return v == "defensivePairwise" ? 0u : v == "pairwise" ? 1u : 2u;
+    }
     uint32_t dofShifts() const {
         std::string v = param<std::string>("dofShift");
         return v == "both" ? 3u : v == "copy" ? 1u : 2u;

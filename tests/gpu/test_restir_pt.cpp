@@ -146,6 +146,10 @@ TEST(ReSTIRPT, UnbiasedEveryShiftAndAblation) {
         auto c = compareWithReference(scene, "restir_pt.json", {{"initial.shift", shift}}, 2.0f);
         EXPECT_LT(c.z, 3.0) << shift << ": restir " << c.restir << " vs " << c.reference;
     }
+    for (const char* mis : {"pairwise", "balance"}) {
+        auto c = compareWithReference(scene, "restir_pt.json", {{"spatial.mis", mis}}, 2.0f);
+        EXPECT_LT(c.z, 3.0) << "spatial " << mis << ": restir " << c.restir << " vs " << c.reference;
+    }
     for (const char* graph : {"restir_pt_spatial_only.json", "restir_pt_temporal_only.json"}) {
         auto c = compareWithReference(scene, graph, {}, 2.0f);
         EXPECT_LT(c.z, 3.0) << graph << ": restir " << c.restir << " vs " << c.reference;

@@ -28,10 +28,76 @@ layout(push_constant) uniform Params {
     float normalThreshold;
     float depthThreshold;
     uint dofShifts;  // Area ReSTIR under a thin lens: SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits
+    uint mis;        // SPATIAL_MIS_*
 } pc;
+
+const uint SPATIAL_MIS_DEFENSIVE_PAIRWISE = 0u;
+const uint SPATIAL_MIS_PAIRWISE = 1u;
+const uint SPATIAL_MIS_BALANCE = 2u;
 
 const uint SHIFT_COPY = 1u;               // film and lens sample replayed (lens-vertex copy)
 const uint SHIFT_PRIMARY_RECONNECT = 2u;  // primary hit kept, lens point solved for
+
+// A random neighbour in the disk of `radius`; false when it is this pixel, off screen, or
+// geometrically dissimilar (then it is not a technique at all).
+bool pick_neighbour(inout Rng rng, uvec2 pixel, PrimaryHit hc, out ivec2 q) {
+    q = ivec2(vec2(pixel) + 0.5 + pc.radius * sample_disk_concentric(rng_next2(rng)));
+    if (all(equal(q, ivec2(pixel))) || any(lessThan(q, ivec2(0))) ||
+        any(greaterThanEqual(q, ivec2(pc.frameSize))))
+        return false;
+    return restir_similar(hc, primary_in[uint(q.y) * pc.frameSize.x + uint(q.x)],
+                          pc.normalThreshold, pc.depthThreshold);
+}
+
+vec3 shift_to(RestirSettings cfg, PathSample s, ivec2 q) {
+    PrimaryHit h = primary_in[uint(q.y) * pc.frameSize.x + uint(q.x)];
+    return restir_shift(cfg, s, restir_domain_primary(cfg, s, h, q, scene_info.camera_open));
+}
+
+// Generalized balance heuristic over all techniques (Lin et al. 2022, Eq. 11 with confidences):
+// m_i(x) = M_i p_hat_i(x) / sum_j M_j p_hat_j(x), every sample shifted to every domain
+// (k^2 + k shifts; copy shift only).
+const uint MAX_NEIGHBOURS = 8u;
+PathReservoir spatial_balance(RestirSettings cfg, uvec2 pixel, PathReservoir rc, PrimaryHit hc,
+                              inout Rng rng) {
+    ivec2 qs[MAX_NEIGHBOURS];
+    uint k = 0u;
+    for (uint i = 0u; i < min(pc.neighbours, MAX_NEIGHBOURS); ++i) {
+        ivec2 q;
+        if (pick_neighbour(rng, pixel, hc, q)) qs[k++] = q;
+    }
+    PathReservoir r = reservoir_empty();
+    float M = rc.M;
+    // Canonical sample: its targets in every neighbour's domain.
+    if (rc.W > 0.0) {
+        float den = rc.M * rc.target;
+        for (uint j = 0u; j < k; ++j) {
+            PathReservoir rj = reservoirs_in[uint(qs[j].y) * pc.frameSize.x + uint(qs[j].x)];
+            den += rj.M * luminance(shift_to(cfg, rc.s, qs[j]));
+        }
+        float m = den > 0.0 ? rc.M * rc.target / den : 0.0;
+        reservoir_add(r, rc.s, rc.F, rc.target, m * rc.target * rc.W, rng_next(rng));
+    }
+    for (uint i = 0u; i < k; ++i) {
+        PathReservoir ri = reservoirs_in[uint(qs[i].y) * pc.frameSize.x + uint(qs[i].x)];
+        M += ri.M;
+        if (ri.W <= 0.0) continue;
+        vec3 F = shift_to(cfg, ri.s, ivec2(pixel));
+        float t = luminance(F);
+        if (t <= 0.0) continue;
+        float den = ri.M * ri.target + rc.M * t;
+        for (uint j = 0u; j < k; ++j) {
+            if (j == i) continue;
+            PathReservoir rj = reservoirs_in[uint(qs[j].y) * pc.frameSize.x + uint(qs[j].x)];
+            den += rj.M * luminance(shift_to(cfg, ri.s, qs[j]));
+        }
+        float m = ri.M * ri.target / den;
+        reservoir_add(r, ri.s, F, t, m * t * ri.W, rng_next(rng));
+    }
+    r.M = M;
+    reservoir_finalize(r);
+    return r;
+}
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -46,6 +112,10 @@ void main() {
         return;
     }
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x5BD1E995u * (pc.round + 1u)));
+    if (pc.mis == SPATIAL_MIS_BALANCE) {
+        reservoirs_out[idx] = spatial_balance(cfg, pixel, rc, hc, rng);
+        return;
+    }
     CameraPose pose = scene_info.camera_open;
     // Shift techniques per neighbour: the replayed (copied) film/lens sample, and with Area
     // ReSTIR under a thin lens also primary-hit reconnection; each gets half the confidence.
@@ -57,13 +127,10 @@ void main() {
     float M = rc.M;
     uint techniques = 0u;
     for (uint i = 0u; i < pc.neighbours; ++i) {
-        ivec2 q = ivec2(vec2(pixel) + 0.5 + pc.radius * sample_disk_concentric(rng_next2(rng)));
-        if (all(equal(q, ivec2(pixel))) || any(lessThan(q, ivec2(0))) ||
-            any(greaterThanEqual(q, ivec2(pc.frameSize))))
-            continue;
+        ivec2 q;
+        if (!pick_neighbour(rng, pixel, hc, q)) continue;
         uint qi = uint(q.y) * pc.frameSize.x + uint(q.x);
         PrimaryHit hq = primary_in[qi];
-        if (!restir_similar(hc, hq, pc.normalThreshold, pc.depthThreshold)) continue;
         PathReservoir rq = reservoirs_in[qi];
         float Mq = rq.M / n_shifts;
         for (uint t = SHIFT_COPY; t <= SHIFT_PRIMARY_RECONNECT; t <<= 1) {
@@ -99,8 +166,12 @@ void main() {
             M += Mq;
         }
     }
+    // Defensive: the canonical technique keeps a share 1 / (k + 1); non-defensive pairwise
+    // divides by k and the canonical weight has no extra 1 (all its weight with no neighbour).
+    bool defensive = pc.mis == SPATIAL_MIS_DEFENSIVE_PAIRWISE || techniques == 0u;
+    if (!defensive) m_c -= 1.0;
     reservoir_add(r, rc.s, rc.F, rc.target, m_c * rc.target * rc.W, rng_next(rng));
-    r.w_sum /= float(techniques + 1u);
+    r.w_sum /= float(defensive ? techniques + 1u : techniques);
     r.M = M;
     reservoir_finalize(r);
     reservoirs_out[idx] = r;
