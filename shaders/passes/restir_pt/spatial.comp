@@ -49,55 +49,8 @@ bool pick_neighbour(inout Rng rng, uvec2 pixel, PrimaryHit hc, out ivec2 q) {
                           pc.normalThreshold, pc.depthThreshold);
 }
 
-vec3 shift_to(RestirSettings cfg, PathSample s, ivec2 q) {
-    PrimaryHit h = primary_in[uint(q.y) * pc.frameSize.x + uint(q.x)];
-    return restir_shift(cfg, s, restir_domain_primary(cfg, s, h, q, scene_info.camera_open));
-}
-
-// Generalized balance heuristic over all techniques (Lin et al. 2022, Eq. 11 with confidences):
-// m_i(x) = M_i p_hat_i(x) / sum_j M_j p_hat_j(x), every sample shifted to every domain
-// (k^2 + k shifts; copy shift only).
 const uint MAX_NEIGHBOURS = 8u;
-PathReservoir spatial_balance(RestirSettings cfg, uvec2 pixel, PathReservoir rc, PrimaryHit hc,
-                              inout Rng rng) {
-    ivec2 qs[MAX_NEIGHBOURS];
-    uint k = 0u;
-    for (uint i = 0u; i < min(pc.neighbours, MAX_NEIGHBOURS); ++i) {
-        ivec2 q;
-        if (pick_neighbour(rng, pixel, hc, q)) qs[k++] = q;
-    }
-    PathReservoir r = reservoir_empty();
-    float M = rc.M;
-    // Canonical sample: its targets in every neighbour's domain.
-    if (rc.W > 0.0) {
-        float den = rc.M * rc.target;
-        for (uint j = 0u; j < k; ++j) {
-            PathReservoir rj = reservoirs_in[uint(qs[j].y) * pc.frameSize.x + uint(qs[j].x)];
-            den += rj.M * luminance(shift_to(cfg, rc.s, qs[j]));
-        }
-        float m = den > 0.0 ? rc.M * rc.target / den : 0.0;
-        reservoir_add(r, rc.s, rc.F, rc.target, m * rc.target * rc.W, rng_next(rng));
-    }
-    for (uint i = 0u; i < k; ++i) {
-        PathReservoir ri = reservoirs_in[uint(qs[i].y) * pc.frameSize.x + uint(qs[i].x)];
-        M += ri.M;
-        if (ri.W <= 0.0) continue;
-        vec3 F = shift_to(cfg, ri.s, ivec2(pixel));
-        float t = luminance(F);
-        if (t <= 0.0) continue;
-        float den = ri.M * ri.target + rc.M * t;
-        for (uint j = 0u; j < k; ++j) {
-            if (j == i) continue;
-            PathReservoir rj = reservoirs_in[uint(qs[j].y) * pc.frameSize.x + uint(qs[j].x)];
-            den += rj.M * luminance(shift_to(cfg, ri.s, qs[j]));
-        }
-        float m = ri.M * ri.target / den;
-        reservoir_add(r, ri.s, F, t, m * t * ri.W, rng_next(rng));
-    }
-    r.M = M;
-    reservoir_finalize(r);
-    return r;
-}
+const uint MAX_TECHNIQUES = 2u * MAX_NEIGHBOURS;  // (neighbour, shift) pairs
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -112,66 +65,113 @@ void main() {
         return;
     }
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x5BD1E995u * (pc.round + 1u)));
-    if (pc.mis == SPATIAL_MIS_BALANCE) {
-        reservoirs_out[idx] = spatial_balance(cfg, pixel, rc, hc, rng);
-        return;
-    }
     CameraPose pose = scene_info.camera_open;
-    // Shift techniques per neighbour: the replayed (copied) film/lens sample, and with Area
-    // ReSTIR under a thin lens also primary-hit reconnection; each gets half the confidence.
+    bool balance = pc.mis == SPATIAL_MIS_BALANCE;
+    // Techniques: each valid neighbour with each shift mapping (the replayed/copied film and lens
+    // sample; with Area ReSTIR under a thin lens also primary-hit reconnection, each then with
+    // half the neighbour's confidence). The balance heuristic uses the copy shift only.
     uint shifts = SHIFT_COPY;
-    if (cfg.area != 0u && pose.up.w > 0.0) shifts = pc.dofShifts;
+    if (!balance && cfg.area != 0u && pose.up.w > 0.0) shifts = pc.dofShifts;
     float n_shifts = float(bitCount(shifts));
-    PathReservoir r = reservoir_empty();
-    float m_c = 1.0;
-    float M = rc.M;
-    uint techniques = 0u;
-    for (uint i = 0u; i < pc.neighbours; ++i) {
+    ivec2 tq[MAX_TECHNIQUES];
+    uint tshift[MAX_TECHNIQUES];
+    uint n = 0u;
+    for (uint i = 0u; i < min(pc.neighbours, MAX_NEIGHBOURS); ++i) {
         ivec2 q;
         if (!pick_neighbour(rng, pixel, hc, q)) continue;
-        uint qi = uint(q.y) * pc.frameSize.x + uint(q.x);
-        PrimaryHit hq = primary_in[qi];
-        PathReservoir rq = reservoirs_in[qi];
-        float Mq = rq.M / n_shifts;
-        for (uint t = SHIFT_COPY; t <= SHIFT_PRIMARY_RECONNECT; t <<= 1) {
-            if ((shifts & t) == 0u) continue;
-            ++techniques;
-            // The neighbour's sample shifted here, and the canonical sample shifted there.
-            PathSample s_qc = rq.s;
-            vec3 F_qc = vec3(0.0), F_cq = vec3(0.0);
-            float J_qc = 1.0, J_cq = 1.0;
-            if (t == SHIFT_COPY) {
-                if (rq.W > 0.0)
-                    F_qc = restir_shift(cfg, rq.s, restir_domain_primary(cfg, rq.s, hc, ivec2(pixel), pose));
-                if (rc.W > 0.0)
-                    F_cq = restir_shift(cfg, rc.s, restir_domain_primary(cfg, rc.s, hq, q, pose));
-            } else {
-                PathSample s_tmp;
-                PrimaryHit dst;
-                if (rq.W > 0.0 &&
-                    restir_primary_reconnect(rq.s, restir_domain_primary(cfg, rq.s, hq, q, pose), q,
-                                             pose, ivec2(pixel), pose, pc.frameSize, s_qc, dst, J_qc))
-                    F_qc = restir_shift(cfg, s_qc, dst);
-                if (rc.W > 0.0 &&
-                    restir_primary_reconnect(rc.s, restir_domain_primary(cfg, rc.s, hc, ivec2(pixel), pose),
-                                             ivec2(pixel), pose, q, pose, pc.frameSize, s_tmp, dst, J_cq))
-                    F_cq = restir_shift(cfg, s_tmp, dst);
+        for (uint t = SHIFT_COPY; t <= SHIFT_PRIMARY_RECONNECT; t <<= 1)
+            if ((shifts & t) != 0u) {
+                tq[n] = q;
+                tshift[n] = t;
+                ++n;
             }
-            float t_qc = luminance(F_qc), t_cq = luminance(F_cq) * J_cq;
-            // Pair (canonical, q, shift t); targets carry the shift's Jacobian (GRIS, Lin et al.
-            // Eq. 9): p_hat_q seen from here is p_hat_q(x_q) / J_qc.
-            float m_q = pairwise_neighbour_weight(Mq, J_qc > 0.0 ? rq.target / J_qc : 0.0, rc.M, t_qc);
-            m_c += pairwise_canonical_term(Mq, t_cq, rc.M, rc.target);
-            reservoir_add(r, s_qc, F_qc, t_qc, m_q * t_qc * rq.W * J_qc, rng_next(rng));
-            M += Mq;
+    }
+
+    // Every shift goes through the one call site below (lavapipe compiles each inlined copy of
+    // the path shift, with its BVH traversals, separately: code size is speed).
+    //   it <  n: technique it's sample shifted here          -> F_here, s_here, J_here
+    //   it >= n: a sample shifted to technique b's domain    -> targets for the MIS weights
+    //            (the canonical sample for pairwise; every sample for balance)
+    vec3 F_here[MAX_TECHNIQUES];
+    PathSample s_here[MAX_TECHNIQUES];
+    float J_here[MAX_TECHNIQUES];
+    float t_c_to[MAX_TECHNIQUES];   // canonical sample's target in technique b (times J)
+    float den[MAX_TECHNIQUES + 1u]; // balance denominators (index n: canonical)
+    for (uint i = 0u; i <= n; ++i) den[i] = 0.0;
+    uint sources = balance ? n + 1u : 1u;
+    for (uint it = 0u; it < n + n * sources; ++it) {
+        bool to_here = it < n;
+        uint a = to_here ? it : (sources == 1u ? n : (it - n) % sources);  // source (n = canonical)
+        uint b = to_here ? n : (it - n) / sources;                           // destination
+        if (a == b) continue;
+        uint tech = to_here ? a : b;  // the technique whose shift mapping is used
+        PathReservoir ra = a == n ? rc : reservoirs_in[uint(tq[a].y) * pc.frameSize.x + uint(tq[a].x)];
+        if (!(ra.W > 0.0) || (!to_here && a != n && !(luminance(F_here[a]) > 0.0))) continue;
+        PathSample s_src = to_here || a == n ? ra.s : s_here[a];  // in its own / this domain
+        ivec2 q_src = to_here ? tq[a] : ivec2(pixel);
+        ivec2 q_dst = to_here ? ivec2(pixel) : tq[b];
+        PrimaryHit h_src = to_here ? primary_in[uint(q_src.y) * pc.frameSize.x + uint(q_src.x)] : hc;
+        PrimaryHit h_dst = to_here ? hc : primary_in[uint(q_dst.y) * pc.frameSize.x + uint(q_dst.x)];
+        bool copy = tshift[tech] == SHIFT_COPY;
+        // Copy: replay the film/lens sample in the destination. Reconnection: the source
+        // domain's primary hit, kept, with the lens point solved for in the destination.
+        PrimaryHit base = restir_domain_primary(cfg, s_src, copy ? h_dst : h_src, copy ? q_dst : q_src, pose);
+        PathSample s_dst = s_src;
+        PrimaryHit dst = base;
+        float J = 1.0;
+        bool ok = copy || restir_primary_reconnect(s_src, base, q_src, pose, q_dst, pose,
+                                                    pc.frameSize, s_dst, dst, J);
+        vec3 F = ok ? restir_shift(cfg, s_dst, dst) : vec3(0.0);
+        if (to_here) {
+            F_here[a] = F;
+            s_here[a] = s_dst;
+            J_here[a] = J;
+        } else {
+            float Mb = reservoirs_in[uint(q_dst.y) * pc.frameSize.x + uint(q_dst.x)].M / n_shifts;
+            float t = luminance(F) * J;
+            if (a == n) t_c_to[b] = t;
+            den[a] += Mb * t;
         }
     }
-    // Defensive: the canonical technique keeps a share 1 / (k + 1); non-defensive pairwise
-    // divides by k and the canonical weight has no extra 1 (all its weight with no neighbour).
-    bool defensive = pc.mis == SPATIAL_MIS_DEFENSIVE_PAIRWISE || techniques == 0u;
-    if (!defensive) m_c -= 1.0;
+    for (uint i = 0u; i < n; ++i)
+        if (rc.W <= 0.0) t_c_to[i] = 0.0;
+
+    PathReservoir r = reservoir_empty();
+    float M = rc.M;
+    float m_c = 1.0;
+    for (uint i = 0u; i < n; ++i) {
+        PathReservoir ri = reservoirs_in[uint(tq[i].y) * pc.frameSize.x + uint(tq[i].x)];
+        float Mi = ri.M / n_shifts;
+        M += Mi;
+        float t = luminance(F_here[i]);
+        float J = J_here[i];
+        // Targets carry the shift's Jacobian (GRIS, Lin et al. Eq. 9): seen from here,
+        // technique i's own target of this sample is p_hat_i(x_i) / J.
+        float t_own = J > 0.0 ? ri.target / J : 0.0;
+        float m_i;
+        if (balance) {
+            float d = Mi * t_own + rc.M * t + den[i];
+            m_i = d > 0.0 ? Mi * t_own / d : 0.0;
+        } else {
+            m_i = pairwise_neighbour_weight(Mi, t_own, rc.M, t);
+            m_c += pairwise_canonical_term(Mi, t_c_to[i], rc.M, rc.target);
+        }
+        if (ri.W > 0.0 && t > 0.0) reservoir_add(r, s_here[i], F_here[i], t, m_i * t * ri.W * J, rng_next(rng));
+    }
+    float norm = 1.0;
+    if (balance) {
+        float d = rc.M * rc.target + den[n];
+        m_c = d > 0.0 ? rc.M * rc.target / d : 0.0;
+    } else if (pc.mis == SPATIAL_MIS_DEFENSIVE_PAIRWISE || n == 0u) {
+        // Defensive: the canonical technique keeps a share 1 / (k + 1).
+        norm = float(n + 1u);
+    } else {
+        // Non-defensive pairwise: divide by k, no extra canonical share.
+        m_c -= 1.0;
+        norm = float(n);
+    }
     reservoir_add(r, rc.s, rc.F, rc.target, m_c * rc.target * rc.W, rng_next(rng));
-    r.w_sum /= float(defensive ? techniques + 1u : techniques);
+    r.w_sum /= norm;
     r.M = M;
     reservoir_finalize(r);
     reservoirs_out[idx] = r;

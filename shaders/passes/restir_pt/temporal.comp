@@ -58,74 +58,18 @@ bool prev_pixel_usable(ivec2 q, PrimaryHit hc) {
                           pc.normalThreshold, pc.depthThreshold);
 }
 
-PathReservoir area_temporal(RestirSettings cfg, uvec2 pixel, PathReservoir rc, PrimaryHit hc) {
-    vec2 t = imageLoad(motionImage, ivec2(pixel)).xy;
-    vec2 base = vec2(pixel) + t;  // footprint origin in the previous film
-    ivec2 q0 = ivec2(floor(base));
-    vec2 frac_ = base - vec2(q0);
-    Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x7E3A1F55u);
-    PathReservoir r = reservoir_empty();
-    float Mc = rc.M;
-    float cap = pc.confidenceCap * rc.M;
+uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 
-    // The canonical sample's technique partner: the previous pixel its film position maps to.
-    vec2 Xc = vec2(pixel) + rc.s.film_lens.xy + t;
-    ivec2 qc = ivec2(floor(Xc));
-    float t_cp = 0.0, M_qc = 0.0;
-    if (rc.W > 0.0 && prev_pixel_usable(qc, hc)) {
-        uint qi = uint(qc.y) * pc.frameSize.x + uint(qc.x);
-        M_qc = min(reservoirs_prev[qi].M, cap);
-        PathSample sc = with_film_offset(rc.s, Xc - vec2(qc));
-        t_cp = luminance(restir_shift(cfg, sc, restir_domain_primary(cfg, sc, primary_prev[qi], qc,
-                                                                      scene_info.camera_prev)));
-    }
-
-    PathReservoir frac_r = reservoir_empty();  // AREA_FAST: the fractional reservoir
-    uint frac_q = 0u;
-    float M_prev = 0.0;
-    for (uint i = 0u; i < 4u; ++i) {
-        ivec2 q = q0 + ivec2(i & 1u, i >> 1);
-        if (!prev_pixel_usable(q, hc)) continue;
-        uint qi = uint(q.y) * pc.frameSize.x + uint(q.x);
-        PathReservoir rq = reservoirs_prev[qi];
-        float Mq = min(rq.M, cap);
-        // Bilinear share of the footprint this pixel covers, for the confidence.
-        vec2 cover = mix(1.0 - frac_, frac_, vec2(i & 1u, i >> 1));
-        M_prev += cover.x * cover.y * Mq;
-        // Its sample lands in this pixel only from its part of the footprint.
-        vec2 X = vec2(q) + rq.s.film_lens.xy - t;
-        if (rq.W <= 0.0 || any(lessThan(X, vec2(pixel))) || any(greaterThanEqual(X, vec2(pixel) + 1.0)))
-            continue;
-        PathSample sq = with_film_offset(rq.s, X - vec2(pixel));
-        if (pc.areaVariant == AREA_FAST) {
-            // Resample by the previous targets (no shift yet); parts are disjoint: weight 1.
-            if (reservoir_add(frac_r, sq, vec3(0.0), rq.target, rq.target * rq.W, rng_next(rng))) {
-                frac_q = i;
-                frac_r.M = Mq;  // confidence of the winner's technique, for its MIS weight
-            }
-            continue;
-        }
-        vec3 F = restir_shift(cfg, sq, restir_domain_primary(cfg, sq, hc, ivec2(pixel), scene_info.camera_open));
-        float t_qc = luminance(F);
-        float m_q = mis_balance2(Mq, rq.target, Mc, t_qc);
-        reservoir_add(r, sq, F, t_qc, m_q * t_qc * rq.W, rng_next(rng));
-    }
-    if (pc.areaVariant == AREA_FAST && frac_r.w_sum > 0.0) {
-        float Mq = frac_r.M;
-        float t_prev = frac_r.target;
-        float W_frac = frac_r.w_sum / t_prev;
-        vec3 F = restir_shift(cfg, frac_r.s, restir_domain_primary(cfg, frac_r.s, hc, ivec2(pixel),
-                                                                      scene_info.camera_open));
-        float t_qc = luminance(F);
-        float m_q = mis_balance2(Mq, t_prev, Mc, t_qc);
-        reservoir_add(r, frac_r.s, F, t_qc, m_q * t_qc * W_frac, rng_next(rng));
-    }
-    float m_c = mis_balance2(Mc, rc.target, M_qc, t_cp);
-    reservoir_add(r, rc.s, rc.F, rc.target, m_c * rc.target * rc.W, rng_next(rng));
-    r.M = Mc + M_prev;
-    reservoir_finalize(r);
-    return r;
-}
+// Shift jobs, all run through one restir_shift call site (lavapipe compiles every inlined copy
+// of the shift and its BVH traversals separately: code size is speed). Job 0: the canonical
+// sample to its previous-frame partner; jobs 1..: previous samples to this pixel.
+const uint MAX_JOBS = 5u;
+struct ShiftJob {
+    PathSample s;
+    uint prev;        // 1: destination is a previous-frame pixel
+    ivec2 q;          // destination pixel
+    uint source;      // previous pixel slot of the sample (jobs 1..)
+};
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -139,50 +83,132 @@ void main() {
         reservoirs_out[idx] = rc;
         return;
     }
-    if (cfg.area != 0u && pc.areaVariant != AREA_COPY) {
-        reservoirs_out[idx] = area_temporal(cfg, pixel, rc, hc);
-        return;
-    }
-    vec2 prev = vec2(pixel) + 0.5 + imageLoad(motionImage, ivec2(pixel)).xy;
-    ivec2 q = ivec2(floor(prev));
-    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(pc.frameSize)))) {
-        reservoirs_out[idx] = rc;
-        return;
-    }
-    uint qi = uint(q.y) * pc.frameSize.x + uint(q.x);
-    PrimaryHit hp = primary_prev[qi];
-    if (!restir_similar(hc, hp, pc.normalThreshold, pc.depthThreshold)) {
-        reservoirs_out[idx] = rc;
-        return;
-    }
-    PathReservoir rp = reservoirs_prev[qi];
-    float Mc = rc.M, Mp = min(rp.M, pc.confidenceCap * rc.M);
+    Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x7E3A1F55u);
+    float Mc = rc.M, cap = pc.confidenceCap * rc.M;
+    bool fractional = cfg.area != 0u && pc.areaVariant != AREA_COPY;
+    vec2 t = imageLoad(motionImage, ivec2(pixel)).xy;
 
-    // Y_p shifted here, and the canonical Y_c shifted to the previous pixel (for its weight).
-    vec3 F_pc = rp.W > 0.0
-        ? restir_shift(cfg, rp.s, restir_domain_primary(cfg, rp.s, hc, ivec2(pixel), scene_info.camera_open))
-        : vec3(0.0);
-    vec3 F_cp = rc.W > 0.0
-        ? restir_shift(cfg, rc.s, restir_domain_primary(cfg, rc.s, hp, q, scene_info.camera_prev))
-        : vec3(0.0);
-    float t_pc = luminance(F_pc), t_cp = luminance(F_cp);
-    float m_c, m_p;
+    // Previous-frame techniques: one pixel (ReSTIR PT, Area copy) or the 2x2 footprint block.
+    ivec2 slot_q[4];
+    float slot_M[4];
+    uint slots = 0u;
+    ShiftJob jobs[MAX_JOBS];
+    uint n_jobs = 1u;
+    jobs[0].prev = 1u;
+    jobs[0].source = 0u;
+    jobs[0].s = rc.s;
+    bool canonical_partner = false;
+    float M_prev = 0.0;
+    PathReservoir frac_r = reservoir_empty();  // AREA_FAST: the fractional reservoir
+    float W_frac = 0.0;
+    if (!fractional) {
+        ivec2 q = ivec2(floor(vec2(pixel) + 0.5 + t));
+        if (prev_pixel_usable(q, hc)) {
+            PathReservoir rp = reservoirs_prev[pixel_index(q)];
+            slot_q[0] = q;
+            slot_M[0] = min(rp.M, cap);
+            slots = 1u;
+            M_prev = slot_M[0];
+            jobs[0].q = q;
+            canonical_partner = true;
+            jobs[1].s = rp.s;
+            jobs[1].prev = 0u;
+            jobs[1].q = ivec2(pixel);
+            jobs[1].source = 0u;
+            n_jobs = 2u;
+        }
+    } else {
+        vec2 base = vec2(pixel) + t;  // footprint origin in the previous film
+        ivec2 q0 = ivec2(floor(base));
+        vec2 f = base - vec2(q0);
+        // The canonical sample's partner: the previous pixel its film position maps to.
+        vec2 Xc = vec2(pixel) + rc.s.film_lens.xy + t;
+        ivec2 qc = ivec2(floor(Xc));
+        for (uint i = 0u; i < 4u; ++i) {
+            ivec2 q = q0 + ivec2(i & 1u, i >> 1);
+            if (!prev_pixel_usable(q, hc)) continue;
+            PathReservoir rq = reservoirs_prev[pixel_index(q)];
+            uint sl = slots++;
+            slot_q[sl] = q;
+            slot_M[sl] = min(rq.M, cap);
+            // Bilinear share of the footprint this pixel covers, for the confidence.
+            vec2 cover = mix(1.0 - f, f, vec2(i & 1u, i >> 1));
+            M_prev += cover.x * cover.y * slot_M[sl];
+            if (all(equal(q, qc))) {
+                canonical_partner = true;
+                jobs[0].q = q;
+                jobs[0].source = sl;
+                jobs[0].s = with_film_offset(rc.s, Xc - vec2(qc));
+            }
+            // Its sample lands in this pixel only from its part of the footprint.
+            vec2 X = vec2(q) + rq.s.film_lens.xy - t;
+            if (rq.W <= 0.0 || any(lessThan(X, vec2(pixel))) || any(greaterThanEqual(X, vec2(pixel) + 1.0)))
+                continue;
+            PathSample sq = with_film_offset(rq.s, X - vec2(pixel));
+            if (pc.areaVariant == AREA_FAST) {
+                // Resample by the previous targets (no shift yet); parts are disjoint: weight 1.
+                if (reservoir_add(frac_r, sq, vec3(0.0), rq.target, rq.target * rq.W, rng_next(rng)))
+                    frac_r.pad = sl;
+                continue;
+            }
+            jobs[n_jobs].s = sq;
+            jobs[n_jobs].prev = 0u;
+            jobs[n_jobs].q = ivec2(pixel);
+            jobs[n_jobs].source = sl;
+            ++n_jobs;
+        }
+        if (pc.areaVariant == AREA_FAST && frac_r.w_sum > 0.0) {
+            W_frac = frac_r.w_sum / frac_r.target;
+            jobs[1].s = frac_r.s;
+            jobs[1].prev = 0u;
+            jobs[1].q = ivec2(pixel);
+            jobs[1].source = frac_r.pad;
+            n_jobs = 2u;
+        }
+    }
+
+    vec3 F[MAX_JOBS];
+    for (uint j = 0u; j < n_jobs; ++j) {
+        F[j] = vec3(0.0);
+        if (j == 0u && (!canonical_partner || rc.W <= 0.0)) continue;
+        ShiftJob job = jobs[j];
+        PrimaryHit h = job.prev != 0u ? primary_prev[pixel_index(job.q)] : hc;
+        PrimaryHit dst = restir_domain_primary(cfg, job.s, h, job.q,
+                                               job.prev != 0u ? scene_info.camera_prev : scene_info.camera_open);
+        F[j] = restir_shift(cfg, job.s, dst);
+    }
+
+    float t_cp = luminance(F[0]);
+    float M_partner = canonical_partner ? slot_M[jobs[0].source] : 0.0;
+    PathReservoir r = reservoir_empty();
+    for (uint j = 1u; j < n_jobs; ++j) {
+        uint sl = jobs[j].source;
+        PathReservoir rq = reservoirs_prev[pixel_index(slot_q[sl])];
+        float t_prev = rq.target, W = rq.W;
+        if (fractional && pc.areaVariant == AREA_FAST) {
+            t_prev = frac_r.target;
+            W = W_frac;
+        }
+        float t_qc = luminance(F[j]);
+        float m_q;
+        if (pc.mis == TEMPORAL_MIS_BALANCE) {
+            m_q = mis_balance2(slot_M[sl], t_prev, Mc, t_qc);
+        } else {
+            m_q = slot_M[sl] / (slot_M[sl] + Mc);
+        }
+        reservoir_add(r, jobs[j].s, F[j], t_qc, m_q * t_qc * W, rng_next(rng));
+    }
+    float m_c;
     if (pc.mis == TEMPORAL_MIS_BALANCE) {
-        m_c = mis_balance2(Mc, rc.target, Mp, t_cp);
-        m_p = mis_balance2(Mp, rp.target, Mc, t_pc);
+        m_c = mis_balance2(Mc, rc.target, M_partner, t_cp);
     } else {
         // 1/|Z(x)| with confidences: only techniques that can produce x count. With
         // countFailedShifts the previous frame is counted even when Y_c cannot shift there.
-        bool prev_counts = t_cp > 0.0 || pc.countFailedShifts != 0u;
-        m_c = Mc / (Mc + (prev_counts ? Mp : 0.0));
-        m_p = Mp / (Mp + Mc);
+        bool counts = t_cp > 0.0 || (pc.countFailedShifts != 0u && canonical_partner);
+        m_c = Mc / (Mc + (counts ? M_partner : 0.0));
     }
-
-    PathReservoir r = reservoir_empty();
-    Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x7E3A1F55u);
     reservoir_add(r, rc.s, rc.F, rc.target, m_c * rc.target * rc.W, rng_next(rng));
-    reservoir_add(r, rp.s, F_pc, t_pc, m_p * t_pc * rp.W, rng_next(rng));
-    r.M = Mc + Mp;
+    r.M = Mc + M_prev;
     reservoir_finalize(r);
     reservoirs_out[idx] = r;
 }
