@@ -9,9 +9,9 @@
 
 namespace loom::restir {
 
-constexpr uint64_t kSettingsBytes = 32;   // RestirSettings header of a reservoir buffer
-constexpr uint64_t kReservoirBytes = 112; // PathReservoir
-constexpr uint64_t kPrimaryHitBytes = 32; // PrimaryHit
+constexpr uint64_t kSettingsBytes = 32;    // RestirSettings header of a reservoir buffer
+constexpr uint64_t kReservoirBytes = 112;  // PathReservoir
+constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 
 // Shift attempt/success counters (RestirCounters in path_shift.glsl), exposed as pass stats.
 class ShiftCounters {

@@ -20,15 +20,18 @@ public:
         r.param("maxBounces", 9).range(1, 15).doc("scattering events per path (PathTracer's)");
         r.paramEnum("shift", "hybrid", {"hybrid", "reconnection", "replay"})
             .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
-        r.param("roughnessThreshold", 0.2).range(0, 1).doc(
-            "hybrid shift: both reconnection endpoints need microfacet alpha above this");
-        r.param("distanceThreshold", 0.1).min(0).doc(
-            "hybrid shift: minimum reconnection segment length (near-field distance)");
+        r.param("roughnessThreshold", 0.2)
+            .range(0, 1)
+            .doc("hybrid shift: both reconnection endpoints need microfacet alpha above this");
+        r.param("distanceThreshold", 0.1)
+            .min(0)
+            .doc("hybrid shift: minimum reconnection segment length (near-field distance)");
         r.paramEnum("misHeuristic", "power", {"balance", "power"})
             .doc("NEE/BSDF MIS inside a path, as PathTracer");
         r.paramEnum("reuse", "path", {"path", "area"})
-            .doc("path: the primary hit is fixed per pixel (ReSTIR PT); area: film and lens "
-                 "samples are part of the sample and are reused too (Area ReSTIR)");
+            .doc(
+                "path: the primary hit is fixed per pixel (ReSTIR PT); area: film and lens "
+                "samples are part of the sample and are reused too (Area ReSTIR)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = shaders.pipeline("passes/restir_pt/initial.comp");
@@ -52,7 +55,9 @@ public:
             .set("seed", ctx.seed())
             .set("candidates", uint32_t(param<int>("candidates")))
             .set("maxBounces", uint32_t(param<int>("maxBounces")))
-            .set("shift", uint32_t(shift == "hybrid" ? 0 : shift == "reconnection" ? 1 : 2))
+            .set("shift", uint32_t(shift == "hybrid"         ? 0
+                                   : shift == "reconnection" ? 1
+                                                             : 2))
             .set("roughThreshold", float(param<double>("roughnessThreshold")))
             .set("distThreshold", float(param<double>("distanceThreshold")))
             .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
@@ -72,7 +77,8 @@ private:
     uint64_t mRays = 0;
 };
 
-LOOM_REGISTER_PASS(ReSTIRPTInitialPass, "ReSTIRPTInitial",
-                   "ReSTIR PT initial candidates: path tree from the GBuffer, RIS into a path reservoir");
+LOOM_REGISTER_PASS(
+    ReSTIRPTInitialPass, "ReSTIRPTInitial",
+    "ReSTIR PT initial candidates: path tree from the GBuffer, RIS into a path reservoir");
 
 }  // namespace loom

@@ -19,11 +19,13 @@ public:
         r.param("normalThreshold", 0.5).range(-1, 1).doc("reject neighbours: normal cosine below");
         r.param("depthThreshold", 0.1).min(0).doc("reject neighbours: relative depth above");
         r.paramEnum("mis", "defensivePairwise", {"defensivePairwise", "pairwise", "balance"})
-            .doc("resampling MIS: defensive pairwise (default), pairwise, or the generalized "
-                 "balance heuristic over all techniques (k^2 + k shifts, copy shift only)");
+            .doc(
+                "resampling MIS: defensive pairwise (default), pairwise, or the generalized "
+                "balance heuristic over all techniques (k^2 + k shifts, copy shift only)");
         r.paramEnum("dofShift", "both", {"both", "copy", "reconnect"})
-            .doc("Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
-                 "both combined by MIS (Zhang et al. 2024, Sec. 6)");
+            .doc(
+                "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
+                "both combined by MIS (Zhang et al. 2024, Sec. 6)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = shaders.pipeline("passes/restir_pt/spatial.comp");

@@ -10,28 +10,39 @@ public:
     void reflect(PassReflection& r) const override {
         r.inputBuffer("reservoirs").doc("this frame's reservoirs (ReSTIRPTInitial)");
         r.inputBuffer("primary").doc("this frame's primary hits (ReSTIRPTInitial)");
-        r.inputBuffer("prevReservoirs").previousFrame().doc(
-            "last frame's final reservoirs: connect the last reuse stage's output");
-        r.inputBuffer("prevPrimary").previousFrame().doc(
-            "last frame's primary hits: connect ReSTIRPTInitial.primary");
+        r.inputBuffer("prevReservoirs")
+            .previousFrame()
+            .doc("last frame's final reservoirs: connect the last reuse stage's output");
+        r.inputBuffer("prevPrimary")
+            .previousFrame()
+            .doc("last frame's primary hits: connect ReSTIRPTInitial.primary");
         r.inputTexture("motion", gpu::Format::RG32F).doc("GBuffer.motion (pixels)");
         r.outputBuffer("reservoirsOut")
             .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
             .doc("reservoirs after temporal reuse");
-        r.param("confidenceCap", 20.0).min(0).doc(
-            "history length: previous confidence clamped to cap x current (Lin et al. Sec. 7)");
+        r.param("confidenceCap", 20.0)
+            .min(0)
+            .doc(
+                "history length: previous confidence clamped to cap x current (Lin et al. Sec. 7)");
         r.param("normalThreshold", 0.5).range(-1, 1).doc("reject history: normal cosine below");
-        r.param("depthThreshold", 0.1).min(0).doc("reject history: relative depth difference above");
-        r.paramEnum("mis", "balance", {"balance", "uniform"}).doc(
-            "generalized balance heuristic (Talbot), or confidence weights over techniques that "
-            "can shift the sample (1/|Z|)");
+        r.param("depthThreshold", 0.1)
+            .min(0)
+            .doc("reject history: relative depth difference above");
+        r.paramEnum("mis", "balance", {"balance", "uniform"})
+            .doc(
+                "generalized balance heuristic (Talbot), or confidence weights over techniques "
+                "that "
+                "can shift the sample (1/|Z|)");
         r.paramEnum("areaReprojection", "fast", {"fast", "robust", "copy"})
-            .doc("Area ReSTIR only (initial.reuse = area): fractional motion vectors over the 2x2 "
-                 "previous pixels, resampled by previous targets then shifted (fast) or all "
-                 "shifted first (robust); copy = one previous pixel, subpixel offset copied");
-        r.param("countFailedShifts", false).doc(
-            "ablation, biased: with mis=uniform, count the history even when the current sample "
-            "cannot shift to it (the known darkening bug)");
+            .doc(
+                "Area ReSTIR only (initial.reuse = area): fractional motion vectors over the 2x2 "
+                "previous pixels, resampled by previous targets then shifted (fast) or all "
+                "shifted first (robust); copy = one previous pixel, subpixel offset copied");
+        r.param("countFailedShifts", false)
+            .doc(
+                "ablation, biased: with mis=uniform, count the history even when the current "
+                "sample "
+                "cannot shift to it (the known darkening bug)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = shaders.pipeline("passes/restir_pt/temporal.comp");

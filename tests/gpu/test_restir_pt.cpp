@@ -25,7 +25,9 @@ using loom::test::RegionStats;
 
 namespace {
 
-std::string sourcePath(const std::string& rel) { return std::string(LOOM_SOURCE_DIR) + "/" + rel; }
+std::string sourcePath(const std::string& rel) {
+    return std::string(LOOM_SOURCE_DIR) + "/" + rel;
+}
 
 // graphs/restir_pt*.json with shade.color as the output, parameters overridden.
 std::unique_ptr<RenderGraph> restirGraph(const std::string& file, const json& overrides = {}) {
@@ -40,9 +42,7 @@ std::unique_ptr<RenderGraph> ptGraph(int spp, int maxBounces) {
                {{{"name", "pt"},
                  {"type", "PathTracer"},
                  {"params",
-                  {{"samplesPerPixel", spp},
-                   {"maxBounces", maxBounces},
-                   {"motionBlur", false}}}}}},
+                  {{"samplesPerPixel", spp}, {"maxBounces", maxBounces}, {"motionBlur", false}}}}}},
               {"edges", json::array()},
               {"outputs", {"pt.color"}}};
     return RenderGraph::parse(g.dump(), "<test>");
@@ -60,8 +60,8 @@ ImageData toLuminance(const ImageData& img) {
 
 // `sequences` independent runs of `frames` frames each (frame f at time t0 + f * dt); each
 // run's mean image is one sample of the returned statistics.
-RegionStats sequenceStats(Renderer& r, const std::string& port, int sequences, int frames,
-                          float dt, int regions = 2) {
+RegionStats sequenceStats(Renderer& r, const std::string& port, int sequences, int frames, float dt,
+                          int regions = 2) {
     RegionStats stats(regions);
     for (int s = 0; s < sequences; ++s) {
         r.setSeed(1000u + 7919u * uint32_t(s));
@@ -94,8 +94,8 @@ int defaultSequences() {
 }
 
 Comparison compareWithReference(const scene::Scene& scene, const std::string& graphFile,
-                                 const json& overrides, float dt, int size = 32,
-                                 int sequences = defaultSequences(), int frames = 8) {
+                                const json& overrides, float dt, int size = 32,
+                                int sequences = defaultSequences(), int frames = 8) {
     Comparison c;
     RegionStats restir(2), reference(2);
     {
@@ -115,7 +115,7 @@ Comparison compareWithReference(const scene::Scene& scene, const std::string& gr
 }
 
 Comparison compareWithReference(const std::string& scenePath, const std::string& graphFile,
-                                 const json& overrides, float dt) {
+                                const json& overrides, float dt) {
     return compareWithReference(scene::loadScene(scenePath), graphFile, overrides, dt);
 }
 
@@ -124,19 +124,21 @@ Comparison compareWithReference(const std::string& scenePath, const std::string&
 // Unbiasedness: the mean of ReSTIR PT over independent sequences equals the reference within 3
 // standard errors in every 2x2 region (4 comparisons; P(|z| > 3) under the null ~0.01).
 TEST(ReSTIRPT, UnbiasedCornellStaticCamera) {
-    auto c = compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json", {}, 0.0f);
+    auto c =
+        compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json", {}, 0.0f);
     EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
 TEST(ReSTIRPT, UnbiasedCornellMovingCamera) {
     // cornell_box.json's camera path: 3 frames of the path per rendered frame.
-    auto c = compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json", {}, 3.0f);
+    auto c =
+        compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json", {}, 3.0f);
     EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
 TEST(ReSTIRPT, UnbiasedGlossyMovingCamera) {
-    auto c = compareWithReference(sourcePath("scenes/glossy_spheres.json"), "restir_pt.json", {},
-                                  2.0f);
+    auto c =
+        compareWithReference(sourcePath("scenes/glossy_spheres.json"), "restir_pt.json", {}, 2.0f);
     EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
@@ -148,7 +150,8 @@ TEST(ReSTIRPT, UnbiasedEveryShiftAndAblation) {
     }
     for (const char* mis : {"pairwise", "balance"}) {
         auto c = compareWithReference(scene, "restir_pt.json", {{"spatial.mis", mis}}, 2.0f);
-        EXPECT_LT(c.z, 3.0) << "spatial " << mis << ": restir " << c.restir << " vs " << c.reference;
+        EXPECT_LT(c.z, 3.0) << "spatial " << mis << ": restir " << c.restir << " vs "
+                            << c.reference;
     }
     for (const char* graph : {"restir_pt_spatial_only.json", "restir_pt_temporal_only.json"}) {
         auto c = compareWithReference(scene, graph, {}, 2.0f);
@@ -234,9 +237,9 @@ TEST(ReSTIRPT, FailedShiftInDenominatorIsDetected) {
     auto good = compareWithReference(scene, "restir_pt_temporal_only.json",
                                      {{"temporal.mis", "uniform"}}, 2.0f);
     EXPECT_LT(good.z, 3.0) << "uniform MIS: " << good.restir << " vs " << good.reference;
-    auto bad = compareWithReference(scene, "restir_pt_temporal_only.json",
-                                    {{"temporal.mis", "uniform"}, {"temporal.countFailedShifts", true}},
-                                    2.0f);
+    auto bad = compareWithReference(
+        scene, "restir_pt_temporal_only.json",
+        {{"temporal.mis", "uniform"}, {"temporal.countFailedShifts", true}}, 2.0f);
     EXPECT_GT(bad.z, 3.0) << "the failed-shift bias was not detected: " << bad.restir << " vs "
                           << bad.reference;
     EXPECT_LT(bad.restir, bad.reference) << "counting failed shifts must darken";
@@ -251,7 +254,9 @@ std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
         {"name", "restir_shift_check"},
         {"passes",
          {{{"name", "gbuffer"}, {"type", "GBuffer"}},
-          {{"name", "initial"}, {"type", "ReSTIRPTInitial"}, {"params", {{"shift", shift}, {"reuse", reuse}}}},
+          {{"name", "initial"},
+           {"type", "ReSTIRPTInitial"},
+           {"params", {{"shift", shift}, {"reuse", reuse}}}},
           {{"name", "check"},
            {"type", "ComputePass"},
            {"params",
@@ -281,7 +286,8 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
         for (std::string shift : {"hybrid", "reconnection", "replay", "area"}) {
             bool area = shift == "area";
             if (area) shift = "hybrid";
-            Renderer r(test::gpuContext(), shiftCheckGraph(shift, area ? "area" : "path"), 48, 48, 3);
+            Renderer r(test::gpuContext(), shiftCheckGraph(shift, area ? "area" : "path"), 48, 48,
+                       3);
             r.loadScene(sourcePath(scene));
             int samples = 0, exact = 0, wrong = 0, reconnected = 0, neighbourOk = 0;
             for (int f = 0; f < 4; ++f) {
@@ -298,8 +304,9 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
                     ++samples;
                     if (std::abs(p[1] - p[0]) <= 1e-3 * p[0]) ++exact;
                     if (std::abs(p[1] - p[0]) > 1e-2 * p[0] && ++wrong <= 5)
-                        ADD_FAILURE() << scene << " " << shift << (area ? " area" : "") << ": stored " << p[0]
-                                      << " self-shift " << p[1] << " rc " << p[3];
+                        ADD_FAILURE()
+                            << scene << " " << shift << (area ? " area" : "") << ": stored " << p[0]
+                            << " self-shift " << p[1] << " rc " << p[3];
                     if (rc > 0) ++reconnected;
                     if (p[2] > 0) ++neighbourOk;
                 }
@@ -328,7 +335,8 @@ TEST(ReSTIRPT, JacobianAndMisWeights) {
                  {"type", "ComputePass"},
                  {"params",
                   {{"shader", std::string(LOOM_TEST_DATA) + "/restir_jacobian.comp"},
-                   {"outputs", {{"results", {{"glsl", "Results"}, {"kind", "buffer"}, {"bytes", n * 16}}}}},
+                   {"outputs",
+                    {{"results", {{"glsl", "Results"}, {"kind", "buffer"}, {"bytes", n * 16}}}}},
                    {"constants",
                     {{"count", {{"type", "uint"}, {"default", n}}},
                      {"seed", {{"type", "uint"}, {"default", 7}}}}},

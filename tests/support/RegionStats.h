@@ -42,7 +42,7 @@ struct RegionStats {
 
 // Largest |z| between two estimates of the same region means.
 inline double maxZ(const RegionStats& a, const RegionStats& b, double* worstA = nullptr,
-            double* worstB = nullptr) {
+                   double* worstB = nullptr) {
     double worst = 0.0;
     for (size_t i = 0; i < a.sum.size(); ++i) {
         double se = std::sqrt(a.stderr2(i) + b.stderr2(i));
