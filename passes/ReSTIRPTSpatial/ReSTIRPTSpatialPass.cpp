@@ -13,7 +13,7 @@ public:
         r.outputBuffer("reservoirsOut")
             .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
             .doc("reservoirs after the last spatial round");
-        r.param("neighbours", 3).range(1, 32).doc("neighbours per round");
+        r.param("neighbours", 3).range(1, 8).doc("neighbours per round (at most 8)");
         r.param("radius", 20.0).min(1).doc("neighbour disk radius, pixels");
         r.param("rounds", 1).range(1, 8).doc("spatial reuse rounds, each reading the previous");
         r.param("normalThreshold", 0.5).range(-1, 1).doc("reject neighbours: normal cosine below");
