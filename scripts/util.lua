@@ -29,6 +29,8 @@ end
 -- otherwise rendered with `opts.graph` (default graphs/pt_reference.json) for `opts.frames`
 -- frames of `opts.spp` paths and written to `opts.path` (EXR) so the next run reuses it.
 -- Default path: out/reference/<scene>_<W>x<H>_<frames>x<spp>spp.exr (shared by the scripts).
+-- `opts.params` ({["pass.param"] = value}) are set on the reference renderer (e.g. maxBounces);
+-- give such references their own `opts.path`.
 function util.reference(opts)
   local path = opts.path
   if path == nil then
@@ -46,6 +48,7 @@ function util.reference(opts)
   local r = loom.renderer{graph = opts.graph or "graphs/pt_reference.json", scene = opts.scene,
                           width = opts.width, height = opts.height, seed = opts.seed or 1000}
   if opts.spp and opts.spp > 0 then r:set("pt.samplesPerPixel", opts.spp) end
+  for key, value in pairs(opts.params or {}) do r:set(key, value) end
   local gpu_ms = 0
   for f = 1, opts.frames do
     r:frame()

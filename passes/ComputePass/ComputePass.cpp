@@ -42,8 +42,8 @@ PortDef parsePort(const std::string& name, const json& j, bool isInput, bool per
     std::string what = (persistent ? "persistent '" : isInput ? "input '" : "output '") + name + "'";
     if (!j.is_object()) throw ParamError(what + " must be an object");
     checkKeys(j,
-              {"glsl", "kind", "format", "optional", "doc", "scale", "size", "bytes",
-               "bytesPerPixel"},
+              {"glsl", "kind", "format", "optional", "previousFrame", "doc", "scale", "size",
+               "bytes", "bytesPerPixel"},
               what);
     PortDef d;
     d.port = name;
@@ -67,6 +67,14 @@ PortDef parsePort(const std::string& name, const json& j, bool isInput, bool per
     if (j.contains("optional")) {
         if (!j["optional"].is_boolean()) throw ParamError(what + ": 'optional' must be a bool");
         d.desc.optional = j["optional"];
+    }
+    if (j.contains("previousFrame")) {
+        // A temporal feedback input: the connected output's value at the end of the last frame.
+        if (!j["previousFrame"].is_boolean())
+            throw ParamError(what + ": 'previousFrame' must be a bool");
+        if (!isInput && j["previousFrame"].get<bool>())
+            throw ParamError(what + ": 'previousFrame' applies to inputs only");
+        d.desc.previousFrame = j["previousFrame"];
     }
     d.desc.doc = str(j, "doc");
     if (j.contains("scale")) {
@@ -160,7 +168,7 @@ public:
         }
         r.param("shader", "").doc("GLSL compute shader (relative to the graph, or search paths)");
         r.paramJson("inputs", json::object())
-            .doc("{port: {glsl, kind: texture|buffer, format|any, optional, doc}}");
+            .doc("{port: {glsl, kind: texture|buffer, format|any, optional, previousFrame, doc}}");
         r.paramJson("outputs", json::object())
             .doc("{port: {glsl, kind, format, scale | size:[w,h] | bytes | bytesPerPixel, doc}}");
         r.paramJson("persistent", json::object())

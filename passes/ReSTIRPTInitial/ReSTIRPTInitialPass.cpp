@@ -17,7 +17,7 @@ public:
             .bytesPerPixel(restir::kPrimaryHitBytes)
             .doc("per-pixel primary hit (camera vertex + triangle/barycentrics)");
         r.param("candidates", 1).range(1, 64).doc("paths per pixel resampled into the reservoir");
-        r.param("maxBounces", 9).range(1, 15).doc("scattering events per path (PathTracer's)");
+        r.param("maxBounces", 9).range(1, 14).doc("scattering events per path (PathTracer's)");
         r.paramEnum("shift", "hybrid", {"hybrid", "reconnection", "replay"})
             .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
         r.param("roughnessThreshold", 0.2)

@@ -317,8 +317,12 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
             // reconnection shift has no distance threshold) may differ by a little.
             EXPECT_EQ(wrong, 0);
             EXPECT_GE(exact, samples * 0.995);
-            if (shift == "replay") EXPECT_EQ(reconnected, 0);
-            if (shift == "hybrid") EXPECT_GT(reconnected, samples / 2);
+            if (shift == "replay") {
+                EXPECT_EQ(reconnected, 0);
+            }
+            if (shift == "hybrid") {
+                EXPECT_GT(reconnected, samples / 2);
+            }
             EXPECT_GT(neighbourOk, samples / 4);
         }
     }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/graph/RenderGraph.h"
+#include "tests/support/ComputeGraphText.h"
 
 namespace {
 
@@ -24,22 +25,10 @@ struct Node {
 std::string graphText(const std::vector<Node>& nodes,
                       const std::vector<std::pair<std::string, std::string>>& edges,
                       const std::vector<std::string>& outputs) {
-    loom::json g;
-    g["name"] = "shape";
-    for (const auto& n : nodes) {
-        loom::json in = loom::json::object(), out = loom::json::object();
-        for (auto& i : n.inputs) in[i] = {{"format", "rgba32f"}};
-        for (auto& o : n.outputs)
-            out[o] = {{"format", n.outputFormat}, {"optional", n.optionalOutputs}};
-        g["passes"].push_back(
-            {{"name", n.name},
-             {"type", "ComputePass"},
-             {"params", {{"shader", n.name + ".comp"}, {"inputs", in}, {"outputs", out}}}});
-    }
-    g["edges"] = loom::json::array();
-    for (auto& [a, b] : edges) g["edges"].push_back({a, b});
-    g["outputs"] = outputs;
-    return g.dump(2);
+    std::vector<loom::test::ComputeNodeSpec> specs;
+    for (const auto& n : nodes)
+        specs.push_back({n.name, n.inputs, {}, n.outputs, n.outputFormat, n.optionalOutputs});
+    return loom::test::computeGraphText("shape", specs, edges, outputs);
 }
 
 std::unique_ptr<RenderGraph> build(const std::vector<Node>& nodes,

@@ -79,7 +79,15 @@ void main() {
     if (idx == 0u) settings_out = cfg;
     PathReservoir rc = reservoirs_in[idx];
     PrimaryHit hc = primary_in[idx];
-    if (pc.historyValid == 0u || !primary_valid(hc)) {
+    // History generated under other path rules (shift, thresholds, bounces) cannot be shifted
+    // consistently: drop it (the first frame after a parameter change).
+    RestirSettings prev_cfg = settings_prev;
+    bool same_rules = prev_cfg.max_bounces == cfg.max_bounces && prev_cfg.shift == cfg.shift &&
+                      prev_cfg.rough_threshold == cfg.rough_threshold &&
+                      prev_cfg.dist_threshold == cfg.dist_threshold &&
+                      all(equal(prev_cfg.frame_size, cfg.frame_size)) &&
+                      prev_cfg.mis_heuristic == cfg.mis_heuristic && prev_cfg.area == cfg.area;
+    if (pc.historyValid == 0u || !same_rules || !primary_valid(hc)) {
         reservoirs_out[idx] = rc;
         return;
     }
@@ -111,11 +119,13 @@ void main() {
             M_prev = slot_M[0];
             jobs[0].q = q;
             canonical_partner = true;
-            jobs[1].s = rp.s;
-            jobs[1].prev = 0u;
-            jobs[1].q = ivec2(pixel);
-            jobs[1].source = 0u;
-            n_jobs = 2u;
+            if (rp.W > 0.0) {
+                jobs[1].s = rp.s;
+                jobs[1].prev = 0u;
+                jobs[1].q = ivec2(pixel);
+                jobs[1].source = 0u;
+                n_jobs = 2u;
+            }
         }
     } else {
         vec2 base = vec2(pixel) + t;  // footprint origin in the previous film

@@ -1,0 +1,307 @@
+-- restir_equal_time.lua: render graphs compared at equal GPU time against a PT reference,
+-- with a static and with a moving camera. Default: PT (graphs/pt.json) vs ReSTIR PT
+-- (graphs/restir_pt.json) on scenes/glossy_spheres.json and, when present,
+-- ../shared/scenes/veach-ajar/scene.xml.
+--
+--   loom run scripts/restir_equal_time.lua [width=128 height=128 budget_ms=4000 steps=5 ...]
+--   loom run scripts/restir_equal_time.lua configs=my_configs.json scenes=scenes/cornell_box.json
+--
+-- Configurations are {name, graph, params, spp_param}: any graph whose `output` port (default
+-- accum.output) accumulates the estimate. configs=FILE.json replaces the default list with
+-- [{"name": .., "graph": .., "params": {..}, "spp_param": ..}, ...].
+--
+-- static: the scene camera never moves. Each configuration renders until the summed GPU frame
+--   times reach budget_ms * 2^(k - steps), k = 1..steps (r:run_for_ms), and the accumulated
+--   image is compared with the reference at every step (relMSE, MAPE): a convergence curve.
+--   Accumulated ReSTIR frames are correlated (they share reservoirs) but the estimator stays
+--   consistent, so the curve still falls towards 0, only more slowly than 1/t.
+-- moving: the camera swings `move_degrees` about its target over `move_frames` frames
+--   (r:camera_path + r:set_time, one time step per frame) and ends on the scene camera, so the
+--   same reference applies to the last frame. Accumulation restarts every frame while the
+--   camera moves, so the last frame is a single-frame estimate (ReSTIR PT with the history it
+--   gathered while moving). Equal time per frame: the configurations without `spp_param` run
+--   first; one with `spp_param` sets it so that its frame time (calibrated on a few frames)
+--   matches the slowest of those. relMSE/MAPE of the last frame are averaged over `repeats`
+--   seeds (r:set_seed + r:reset, one renderer per configuration).
+-- Metrics: relMSE and MAPE (loom.metrics, eps 0.01) and relMSE without the worst `trim`
+-- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
+--
+-- Arguments: scenes (comma list; missing files are skipped), cameras (static,moving), width,
+-- height, budget_ms, steps, move_frames, move_degrees, repeats, seed, ref_frames, ref_spp,
+-- ref_bounces (the estimators' maxBounces, 9), trim, configs, out. Scenes are looked up as
+-- given, then in the Loom source tree (so ../shared/scenes/... works from the repository root).
+-- Writes OUT/restir_equal_time.csv (every step), OUT/<scene>_static.png/.svg (relMSE vs GPU
+-- time), OUT/<scene>_<config>_<camera>.png (final images), and prints the tables.
+local util = require("util")
+
+local width, height = loom.arg("width", 128), loom.arg("height", 128)
+local budget = loom.arg("budget_ms", 4000.0)
+local steps = loom.arg("steps", 5)
+local move_frames = loom.arg("move_frames", 16)
+local move_degrees = loom.arg("move_degrees", 10.0)
+local repeats = loom.arg("repeats", 2)
+local seed = loom.arg("seed", 1)
+local out = loom.arg("out", "out/restir_equal_time")
+local cameras = loom.arg("cameras", {"static", "moving"})
+local scenes = loom.arg("scenes", {"scenes/glossy_spheres.json",
+                                   "../shared/scenes/veach-ajar/scene.xml"})
+local ref_frames, ref_spp = loom.arg("ref_frames", 16), loom.arg("ref_spp", 64)
+local ref_bounces = loom.arg("ref_bounces", 9)
+
+local configs = {
+  {name = "PT", graph = "graphs/pt.json", params = {}, spp_param = "pt.samplesPerPixel"},
+  {name = "ReSTIR PT", graph = "graphs/restir_pt.json", params = {}},
+}
+local configs_file = loom.arg("configs", "")
+if configs_file ~= "" then configs = loom.read_json(configs_file) end
+
+local function exists(path)
+  local f = io.open(path, "r")
+  if f then f:close() end
+  return f ~= nil
+end
+
+-- A scene path as given, else relative to the Loom source tree (this script's parent folder),
+-- as loom.renderer looks files up; nil when neither exists.
+local source = debug and debug.getinfo(1, "S").source or ""
+local script_dir = source:match("^@(.*)[/\\]") or "."
+local function resolve(path)
+  if exists(path) then return path end
+  local in_tree = script_dir .. "/../" .. path
+  if path:sub(1, 1) ~= "/" and exists(in_tree) then return in_tree end
+  return nil
+end
+
+-- Scene name for files and tables: the file stem, or its folder for Mitsuba's "scene.xml".
+local function stem_of(path)
+  local stem = path:match("([^/\\]+)%.%w+$") or "scene"
+  if stem == "scene" then stem = path:match("([^/\\]+)[/\\][^/\\]+$") or stem end
+  return stem
+end
+
+-- relMSE without the worst `frac` of the pixels (per-pixel relMSE, loom.metrics' eps = 0.01):
+-- fireflies dominate relMSE in scenes like veach-ajar; this shows the error of the rest.
+local function trimmed_relmse(img, ref, frac)
+  local errs, w, h = {}, ref:width(), ref:height()
+  for y = 0, h - 1 do
+    for x = 0, w - 1 do
+      local a1, a2, a3 = img:get(x, y)
+      local b1, b2, b3 = ref:get(x, y)
+      errs[#errs + 1] = ((a1 - b1) ^ 2 / (b1 ^ 2 + 0.01) + (a2 - b2) ^ 2 / (b2 ^ 2 + 0.01)
+                         + (a3 - b3) ^ 2 / (b3 ^ 2 + 0.01)) / 3
+    end
+  end
+  table.sort(errs)
+  local keep = #errs - math.floor(#errs * frac)
+  local sum = 0
+  for i = 1, keep do sum = sum + errs[i] end
+  return sum / keep
+end
+local trim = loom.arg("trim", 0.001)
+local function slug(s) return (s:gsub("[^%w]+", "_")) end
+
+local function renderer(cfg, scene, extra)
+  local params = {}
+  for k, v in pairs(cfg.params or {}) do params[k] = v end
+  for k, v in pairs(extra or {}) do params[k] = v end
+  return loom.renderer{graph = cfg.graph, scene = scene, width = width, height = height,
+                       seed = seed, params = params}
+end
+
+-- Keyframes that swing the camera `move_degrees` about its target (up axis) and end on the
+-- scene camera at time move_frames - 1.
+local function swing_path(cam, path)
+  local o, t, u = cam.origin, cam.target, cam.up
+  local len = math.sqrt(u[1] ^ 2 + u[2] ^ 2 + u[3] ^ 2)
+  local k = {u[1] / len, u[2] / len, u[3] / len}
+  local v = {o[1] - t[1], o[2] - t[2], o[3] - t[3]}
+  local keys = {}
+  for i, deg in ipairs({move_degrees, 0}) do
+    local a = math.rad(deg)
+    local c, s = math.cos(a), math.sin(a)
+    local kxv = {k[2] * v[3] - k[3] * v[2], k[3] * v[1] - k[1] * v[3], k[1] * v[2] - k[2] * v[1]}
+    local kdv = k[1] * v[1] + k[2] * v[2] + k[3] * v[3]
+    local origin = {}
+    for j = 1, 3 do origin[j] = t[j] + v[j] * c + kxv[j] * s + k[j] * kdv * (1 - c) end
+    keys[i] = {time = (i - 1) * (move_frames - 1), origin = origin, target = t, up = u,
+               fov = cam.fov}
+  end
+  loom.write_json(path, keys)
+end
+
+local rows, summary, stage_rows = {}, {}, {}
+for _, scene_arg in ipairs(scenes) do
+  local scene = resolve(scene_arg)
+  if not scene then
+    print("skipping " .. scene_arg .. " (not found)")
+    goto next_scene
+  end
+  do
+    local name = stem_of(scene)
+    local ref = util.reference{scene = scene, width = width, height = height,
+                               frames = ref_frames, spp = ref_spp,
+                               params = {["pt.maxBounces"] = ref_bounces},
+                               path = string.format("out/reference/%s_%dx%d_%dx%dspp_b%d.exr",
+                                                    name, width, height, ref_frames, ref_spp,
+                                                    ref_bounces)}
+    local ms_per_frame, pass_ms = {}, {}
+    local static_series = {}
+    local want = {}
+    for _, c in ipairs(cameras) do want[c] = true end
+
+    -- Static camera: convergence at equal GPU time (always run: it measures ms/frame).
+    for c, cfg in ipairs(configs) do
+      local r = renderer(cfg, scene)
+      local port = cfg.output or "accum.output"
+      r:frame()  -- untimed warm-up (pipeline creation), then start over
+      r:reset()
+      local spent, frames, xs, ys = 0, 0, {}, {}
+      local nsteps = want.static and steps or 1
+      for k = 1, nsteps do
+        local target = want.static and budget * 2 ^ (k - steps) or budget / 2 ^ (steps - 1)
+        local n, t = r:run_for_ms(math.max(0, target - spent))
+        frames, spent = frames + n, spent + t
+        local img = r:image(port)
+        local row = {index = #rows + 1, scene = name, camera = "static", config = cfg.name,
+                     budget_ms = target, gpu_ms = spent, frames = frames,
+                     relmse = loom.metrics.relmse(img, ref), mape = loom.metrics.mape(img, ref)}
+        if want.static then
+          row.relmse_trim = trimmed_relmse(img, ref, trim)
+          rows[#rows + 1] = row
+        end
+        xs[k], ys[k] = spent, row.relmse
+      end
+      ms_per_frame[c] = spent / frames
+      -- Per-stage GPU times of the last frame (r:timings()).
+      for _, p in ipairs(r:timings().passes) do
+        pass_ms[cfg.name .. "/" .. p.pass] = p.ms
+        stage_rows[#stage_rows + 1] = {scene = name, config = cfg.name, pass = p.pass, ms = p.ms}
+      end
+      if want.static then
+        static_series[c] = {name = cfg.name, x = xs, y = ys}
+        summary[#summary + 1] = {scene = name, camera = "static", config = cfg.name,
+                                 frames = frames, gpu_ms = spent, ms_per_frame = spent / frames,
+                                 relmse = ys[#ys], mape = rows[#rows].mape,
+                                 relmse_trim = rows[#rows].relmse_trim}
+        r:capture("tm.output", string.format("%s/%s_%s_static.png", out, name, slug(cfg.name)))
+      end
+      r:close()
+      loom.progress(c, #configs, name .. " static")
+    end
+    if want.static then
+      loom.plot{path = string.format("%s/%s_static", out, name),
+                title = string.format("%s %dx%d: relMSE vs GPU time (static camera)", name,
+                                      width, height),
+                x_label = "GPU time (ms)", y_label = "relMSE", log_x = true,
+                log_y = util.all_positive(static_series), series = static_series}
+    end
+
+    -- Moving camera: same frames for everyone. Configurations without spp_param run first; the
+    -- others raise spp_param until their frame time matches the slowest of those.
+    if want.moving then
+      local path = string.format("%s/%s_path.json", out, name)
+      local order = {}
+      for c, cfg in ipairs(configs) do if not cfg.spp_param then order[#order + 1] = c end end
+      for c, cfg in ipairs(configs) do if cfg.spp_param then order[#order + 1] = c end end
+      local target_ms, path_written = 0, false
+      for _, c in ipairs(order) do
+        local cfg = configs[c]
+        local r = renderer(cfg, scene)
+        if not path_written then swing_path(r:camera(), path) end
+        path_written = true
+        r:camera_path(path)
+        r:set_time(0)
+        local spp = 1
+        if cfg.spp_param then
+          -- Frame time = fixed + spp x cost of the spp pass: a first guess from the static run,
+          -- then two corrections from frames measured at the first pose.
+          local pass = cfg.spp_param:match("^([^.]+)")
+          local cost = pass_ms[cfg.name .. "/" .. pass] or ms_per_frame[c]
+          local fixed = math.max(0, ms_per_frame[c] - cost)
+          spp = math.max(1, math.floor((target_ms - fixed) / cost + 0.5))
+          for _ = 1, 2 do
+            r:set(cfg.spp_param, spp)
+            r:frame()
+            local ms = 0
+            for _ = 1, 3 do
+              r:frame()
+              ms = ms + r:timings().frame_ms / 3
+            end
+            local per_spp = math.max(1e-3, (ms - fixed) / spp)
+            spp = math.max(1, math.floor((target_ms - fixed) / per_spp + 0.5))
+          end
+          r:set(cfg.spp_param, spp)
+        end
+        local sum_relmse, sum_trim, sum_mape, sum_ms, total_frames = 0, 0, 0, 0, 0
+        for rep = 1, repeats do
+          r:set_seed(seed + 100 * rep)
+          r:set_time(0)
+          r:frame()  -- warm-up at the first pose, then history and accumulation start over
+          r:reset()
+          for f = 0, move_frames - 1 do
+            r:set_time(f)
+            r:frame()
+            sum_ms = sum_ms + r:timings().frame_ms
+            total_frames = total_frames + 1
+          end
+          local img = r:image(cfg.output or "accum.output")
+          sum_relmse = sum_relmse + loom.metrics.relmse(img, ref)
+          sum_trim = sum_trim + trimmed_relmse(img, ref, trim)
+          sum_mape = sum_mape + loom.metrics.mape(img, ref)
+          if rep == 1 then
+            r:capture("tm.output", string.format("%s/%s_%s_moving.png", out, name,
+                                                 slug(cfg.name)))
+          end
+        end
+        r:close()
+        if not cfg.spp_param then target_ms = math.max(target_ms, sum_ms / total_frames) end
+        local row = {index = #rows + 1, scene = name, camera = "moving", config = cfg.name,
+                     frames = total_frames, gpu_ms = sum_ms, spp = spp,
+                     relmse = sum_relmse / repeats, relmse_trim = sum_trim / repeats,
+                     mape = sum_mape / repeats}
+        rows[#rows + 1] = row
+        summary[#summary + 1] = {scene = name, camera = "moving", config = cfg.name,
+                                 frames = total_frames, gpu_ms = sum_ms, spp = spp,
+                                 ms_per_frame = sum_ms / total_frames, relmse = row.relmse,
+                                 relmse_trim = row.relmse_trim, mape = row.mape}
+        loom.progress(#summary, #summary, name .. " moving")
+      end
+    end
+  end
+  ::next_scene::
+end
+
+-- relMSE ratio: the first configuration's relMSE over each one's (> 1: better than it).
+for _, row in ipairs(summary) do
+  for _, base in ipairs(summary) do
+    if base.scene == row.scene and base.camera == row.camera and base.config == configs[1].name then
+      row.ratio = base.relmse / row.relmse
+      row.ratio_trim = base.relmse_trim / row.relmse_trim
+    end
+  end
+end
+
+print(string.format("\nequal time at %dx%d: static %.0f GPU ms per configuration; moving %d "
+                    .. "frames x %d repeats", width, height, budget, move_frames, repeats))
+util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
+                  {key = "frames", fmt = "%d"}, {key = "spp", fmt = "%d"},
+                  {key = "gpu_ms", title = "GPU ms", fmt = "%.0f"},
+                  {key = "ms_per_frame", title = "ms/frame", fmt = "%.1f"},
+                  {key = "relmse", title = "relMSE", fmt = "%.5f"},
+                  {key = "relmse_trim", title = "relMSE trim", fmt = "%.5f"},
+                  {key = "mape", title = "MAPE", fmt = "%.4f"},
+                  {key = "ratio", title = configs[1].name .. "/this relMSE", fmt = "%.2f"},
+                  {key = "ratio_trim", title = "(trim)", fmt = "%.2f"}},
+                 summary)
+print("\nGPU ms per pass (last static frame)")
+util.print_table({{key = "scene"}, {key = "config"}, {key = "pass"},
+                  {key = "ms", title = "GPU ms", fmt = "%.2f"}}, stage_rows)
+
+loom.write_csv(out .. "/restir_equal_time.csv", rows,
+               {columns = {"index", "scene", "camera", "config", "budget_ms", "gpu_ms",
+                           "frames", "spp", "relmse", "relmse_trim", "mape"}})
+loom.write_csv(out .. "/summary.csv", summary,
+               {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
+                           "ms_per_frame", "relmse", "relmse_trim", "mape", "ratio",
+                           "ratio_trim"}})
+print(string.format("\nwrote %s/restir_equal_time.csv, %s/summary.csv and plots", out, out))
