@@ -138,12 +138,23 @@ GraphLayout layoutGraph(const RenderGraph& graph, const LayoutStyle& style) {
     float maxBottom = 0.0f;
     for (int c = 0; c < columns; ++c) {
         float y = style.margin;
+        // One width per column: the widest title or input+output label row of its nodes.
+        float colWidth = style.nodeWidth;
+        for (int v : byColumn[c]) {
+            const auto& node = layout.nodes[v];
+            size_t in = 0, out = 0;
+            for (auto& p : node.inputs) in = std::max(in, p.port.size());
+            for (auto& p : node.outputs) out = std::max(out, p.port.size());
+            size_t title = node.pass.size() + 3 + node.type.size();
+            colWidth = std::max({colWidth, float(in + out) * style.charWidth + style.labelGap,
+                                 float(title) * style.charWidth + 2 * style.padding});
+        }
         for (int v : byColumn[c]) {
             auto& node = layout.nodes[v];
             size_t pins = std::max(node.inputs.size(), node.outputs.size());
             node.x = x;
             node.y = y;
-            node.width = style.nodeWidth;
+            node.width = colWidth;
             node.height = style.headerHeight + float(std::max<size_t>(pins, 1)) * style.pinSpacing +
                           style.padding;
             for (size_t i = 0; i < node.inputs.size(); ++i) {
@@ -159,7 +170,7 @@ GraphLayout layoutGraph(const RenderGraph& graph, const LayoutStyle& style) {
             y += node.height + style.rowGap;
             maxBottom = std::max(maxBottom, node.y + node.height);
         }
-        x += style.nodeWidth + style.columnGap;
+        x += colWidth + style.columnGap;
     }
     layout.width = columns ? x - style.columnGap + style.margin : 2 * style.margin;
     layout.height = maxBottom + style.margin;

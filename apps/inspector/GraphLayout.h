@@ -10,7 +10,9 @@
 namespace loom::inspector {
 
 struct LayoutStyle {
-    float nodeWidth = 136.0f;
+    float nodeWidth = 136.0f;  // minimum; wider when titles or port labels need it
+    float charWidth = 7.0f;    // of the UI font (ImGui's default ProggyClean)
+    float labelGap = 28.0f;    // between an input label and an output label on one row
     float headerHeight = 22.0f;
     float pinSpacing = 18.0f;
     float padding = 6.0f;     // below the last pin
