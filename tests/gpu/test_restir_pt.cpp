@@ -328,9 +328,10 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
     }
 }
 
-// reconnection_jacobian (solid angle, Lin et al. Eq. 17) against finite differences on 4096
-// random configurations, and the MIS weights of temporal (2-way balance) and spatial (defensive
-// pairwise) reuse summing to 1 over all techniques for random targets incl. failed shifts.
+// reconnection_jacobian (solid angle, Lin et al. Eq. 17) and its primary-sample-space form
+// against finite differences on 4096 random configurations, and the MIS weights of temporal (2-way
+// balance) and spatial (defensive pairwise) reuse summing to 1 over all techniques for random
+// targets incl. failed shifts.
 TEST(ReSTIRPT, JacobianAndMisWeights) {
     const uint32_t n = 4096;
     json g = {{"name", "restir_jacobian"},
@@ -340,13 +341,14 @@ TEST(ReSTIRPT, JacobianAndMisWeights) {
                  {"params",
                   {{"shader", std::string(LOOM_TEST_DATA) + "/restir_jacobian.comp"},
                    {"outputs",
-                    {{"results", {{"glsl", "Results"}, {"kind", "buffer"}, {"bytes", n * 16}}}}},
+                    {{"results", {{"glsl", "Results"}, {"kind", "buffer"}, {"bytes", n * 16}}},
+                     {"pss", {{"glsl", "PssResults"}, {"kind", "buffer"}, {"bytes", n * 8}}}}},
                    {"constants",
                     {{"count", {{"type", "uint"}, {"default", n}}},
                      {"seed", {{"type", "uint"}, {"default", 7}}}}},
                    {"dispatch", {n, 1, 1}}}}}}},
               {"edges", json::array()},
-              {"outputs", {"k.results"}}};
+              {"outputs", {"k.results", "k.pss"}}};
     Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), "<test>"), 8, 8, 1);
     r.frame();
     std::vector<float> v(n * 4);
@@ -364,4 +366,18 @@ TEST(ReSTIRPT, JacobianAndMisWeights) {
     }
     EXPECT_GT(checked, int(n) / 2);
     EXPECT_LT(worst, 5e-3) << "reconnection Jacobian vs finite differences";
+
+    // Primary-sample-space form (cosine-sampled predecessors).
+    std::vector<float> pss(n * 2);
+    r.gpu().downloadBuffer(*r.graph().outputBuffer("k.pss"), pss.data(), pss.size() * 4);
+    int pssChecked = 0;
+    double pssWorst = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        float J = pss[i * 2], Jfd = pss[i * 2 + 1];
+        if (Jfd < 0) continue;
+        ++pssChecked;
+        pssWorst = std::max(pssWorst, double(std::abs(J - Jfd) / Jfd));
+    }
+    EXPECT_GT(pssChecked, int(n) / 4);
+    EXPECT_LT(pssWorst, 1e-2) << "PSS reconnection Jacobian vs finite differences";
 }
