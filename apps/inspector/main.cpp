@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/CliArgs.h"
 #include "apps/inspector/InspectorApp.h"
 #include "core/util/Log.h"
 
@@ -35,20 +36,8 @@ Keys: Space pause, N single step, R reset accumulation, Esc quit.
 Without a display, run under a virtual one: xvfb-run -a loom-inspector ...
 )";
 
-struct UsageError : UserError {
-    using UserError::UserError;
-};
-
-uint32_t parseUint(const std::string& opt, const std::string& v) {
-    try {
-        size_t pos = 0;
-        long long x = std::stoll(v, &pos);
-        if (pos != v.size() || x < 0 || x > 0xffffffffll) throw std::invalid_argument("");
-        return uint32_t(x);
-    } catch (const std::exception&) {
-        throw UsageError(opt + " expects a non-negative integer, got '" + v + "'");
-    }
-}
+using cli::parseUint;
+using cli::UsageError;
 
 inspector::InspectorApp::Options parseArgs(const std::vector<std::string>& args) {
     inspector::InspectorApp::Options o;

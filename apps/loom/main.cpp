@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/CliArgs.h"
 #include "core/graph/Renderer.h"
 #include "core/script/Csv.h"
 #include "core/script/LuaBindings.h"
@@ -18,9 +19,8 @@ using namespace loom;
 
 namespace {
 
-struct UsageError : UserError {
-    using UserError::UserError;
-};
+using cli::parseUint;
+using cli::UsageError;
 
 const char* kMainHelp = R"(loom - research rendering framework (render graphs on Vulkan compute)
 
@@ -96,17 +96,6 @@ equal the unsharded run. Empty files (shards that owned no values) are skipped.
 )";
 
 bool isHelp(const std::string& a) { return a == "--help" || a == "-h"; }
-
-uint32_t parseUint(const std::string& opt, const std::string& v) {
-    try {
-        size_t pos = 0;
-        long long x = std::stoll(v, &pos);
-        if (pos != v.size() || x < 0 || x > 0xffffffffll) throw std::invalid_argument("");
-        return uint32_t(x);
-    } catch (const std::exception&) {
-        throw UsageError(opt + " expects a non-negative integer, got '" + v + "'");
-    }
-}
 
 json parseValue(const std::string& v) {
     try {

@@ -2,6 +2,7 @@
 // lens, camera motion blur) with AOVs. See README.md.
 #include <fmt/format.h>
 
+#include "core/gpu/CounterBuffer.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 
@@ -41,12 +42,10 @@ public:
             defines[name] = std::string(ctx.has(port) ? "1" : "0");
         }
         auto pipeline = ctx.shaders().pipeline("passes/path_tracer/path_tracer.comp", defines);
-        if (!mRayCounter) mRayCounter = ctx.gpu().createBuffer(16, "RayCounter");
-        ctx.cmd().fillBuffer(*mRayCounter, 0);
-        ctx.cmd().barrier();
+        auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         scene.bind(b);
-        b.set("RayCounter", mRayCounter);
+        b.set("RayCounter", rayCounter);
         b.set("colorImage", ctx.texture("color"));
         for (auto [port, glsl] : {std::pair{"albedo", "albedoImage"},
                                   {"normal", "normalImage"},
@@ -70,16 +69,11 @@ public:
             .set("clampValue", float(param<double>("clamp")));
         ctx.cmd().dispatchThreads(*pipeline, b, &pc, ctx.width(), ctx.height());
     }
-    void frameCompleted(gpu::Context& gpu) override {
-        uint32_t rays = 0;
-        if (mRayCounter) gpu.downloadBuffer(*mRayCounter, &rays, sizeof(rays));
-        mRays = rays;
-    }
-    std::map<std::string, double> stats() const override { return {{"rays", double(mRays)}}; }
+    void frameCompleted(gpu::Context& gpu) override { mRayCounter.read(gpu); }
+    std::map<std::string, double> stats() const override { return {{"rays", mRayCounter[0]}}; }
 
 private:
-    std::shared_ptr<gpu::Buffer> mRayCounter;
-    uint64_t mRays = 0;
+    gpu::CounterBuffer<1> mRayCounter{"RayCounter"};
 };
 
 LOOM_REGISTER_PASS(PathTracerPass, "PathTracer",

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/gpu/Context.h"
+#include "core/gpu/CounterBuffer.h"
 
 namespace loom::restir {
 
@@ -17,26 +18,20 @@ constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 class ShiftCounters {
 public:
     std::shared_ptr<gpu::Buffer> reset(gpu::Context& gpu, gpu::CommandList& cmd) {
-        if (!mBuffer) mBuffer = gpu.createBuffer(16, "RestirCounters");
-        cmd.fillBuffer(*mBuffer, 0);
-        cmd.barrier();
-        return mBuffer;
+        return mCounters.reset(gpu, cmd);
     }
-    void read(gpu::Context& gpu) {
-        if (mBuffer) gpu.downloadBuffer(*mBuffer, mValues, sizeof(mValues));
-    }
-    void addStats(std::map<std::string, double>& s) const {
-        s["shiftAttemptsReconnect"] = mValues[0];
-        s["shiftSuccessReconnect"] = mValues[1];
-        s["shiftAttemptsReplay"] = mValues[2];
-        s["shiftSuccessReplay"] = mValues[3];
-        double attempts = double(mValues[0]) + mValues[2];
-        s["reconnectShare"] = attempts > 0 ? mValues[0] / attempts : 0.0;
+    void read(gpu::Context& gpu) { mCounters.read(gpu); }
+    std::map<std::string, double> stats() const {
+        double attempts = double(mCounters[0]) + mCounters[2];
+        return {{"shiftAttemptsReconnect", mCounters[0]},
+                {"shiftSuccessReconnect", mCounters[1]},
+                {"shiftAttemptsReplay", mCounters[2]},
+                {"shiftSuccessReplay", mCounters[3]},
+                {"reconnectShare", attempts > 0 ? mCounters[0] / attempts : 0.0}};
     }
 
 private:
-    std::shared_ptr<gpu::Buffer> mBuffer;
-    uint32_t mValues[4] = {0, 0, 0, 0};
+    gpu::CounterBuffer<4> mCounters{"RestirCounters"};
 };
 
 }  // namespace loom::restir

@@ -1,4 +1,5 @@
 // ReSTIRPTInitial: initial path candidates of ReSTIR PT (Lin et al. 2022). See README.md.
+#include "core/gpu/CounterBuffer.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 #include "passes/ReSTIRPTInitial/PathReservoir.h"
@@ -37,16 +38,14 @@ public:
         mPipeline = shaders.pipeline("passes/restir_pt/initial.comp");
     }
     void execute(ExecuteContext& ctx) override {
-        if (!mRayCounter) mRayCounter = ctx.gpu().createBuffer(16, "RayCounter");
-        ctx.cmd().fillBuffer(*mRayCounter, 0);
-        ctx.cmd().barrier();
+        auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         ctx.scene().bind(b);
         b.set("vbufferImage", ctx.texture("vbuffer"))
             .set("sampleImage", ctx.texture("sample"))
             .set("ReservoirsOut", ctx.buffer("reservoirs"))
             .set("PrimaryOut", ctx.buffer("primary"))
-            .set("RayCounter", mRayCounter);
+            .set("RayCounter", rayCounter);
         std::string shift = param<std::string>("shift");
         gpu::PushConstants pc(*mPipeline);
         uint32_t size[2] = {ctx.width(), ctx.height()};
@@ -64,17 +63,12 @@ public:
             .set("area", uint32_t(param<std::string>("reuse") == "area"));
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
-    void frameCompleted(gpu::Context& gpu) override {
-        uint32_t rays = 0;
-        if (mRayCounter) gpu.downloadBuffer(*mRayCounter, &rays, sizeof(rays));
-        mRays = rays;
-    }
-    std::map<std::string, double> stats() const override { return {{"rays", double(mRays)}}; }
+    void frameCompleted(gpu::Context& gpu) override { mRayCounter.read(gpu); }
+    std::map<std::string, double> stats() const override { return {{"rays", mRayCounter[0]}}; }
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
-    std::shared_ptr<gpu::Buffer> mRayCounter;
-    uint64_t mRays = 0;
+    gpu::CounterBuffer<1> mRayCounter{"RayCounter"};
 };
 
 LOOM_REGISTER_PASS(

@@ -64,11 +64,7 @@ public:
         }
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
-    std::map<std::string, double> stats() const override {
-        std::map<std::string, double> s;
-        mCounters.addStats(s);
-        return s;
-    }
+    std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
     uint32_t misMode() const {

@@ -72,11 +72,7 @@ public:
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
-    std::map<std::string, double> stats() const override {
-        std::map<std::string, double> s;
-        mCounters.addStats(s);
-        return s;
-    }
+    std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
     int areaVariant() const {

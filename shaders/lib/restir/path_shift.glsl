@@ -111,6 +111,16 @@ struct GenState {
     vec3 suffix_f;    // product of f at x_{k+1} .. x_{j-1}
 };
 
+// The reconnection part of a candidate's sample.
+void path_sample_set_rc(inout PathSample s, uint flags, uint rc_id, vec2 rc_bary, vec3 rc_dir,
+                        vec3 rc_Lo) {
+    s.flags = flags;
+    s.rc_id = rc_id;
+    s.rc_bary = rc_bary;
+    s.rc_dir = rc_dir;
+    s.rc_Lo = rc_Lo;
+}
+
 void restir_stream_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, vec3 C,
                              float p_mixed, float inv_candidates) {
     float w = luminance(C) * inv_candidates;
@@ -163,26 +173,20 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                     s.light_pdf = ls.pdf;
                     float p_mixed;
                     if (g.k != 0u) {
-                        s.flags = path_pack_flags(j + 1u, g.k, true, g.kind, ls.is_delta);
-                        s.rc_id = g.rc_id;
-                        s.rc_bary = g.rc_bary;
-                        if (g.k == j) {
-                            s.rc_dir = ls.wi;
-                            s.rc_Lo = ls.Li;
-                        } else {
-                            s.rc_dir = g.rc_dir;
-                            s.rc_Lo = g.suffix_f * f * ls.Li * w;
-                        }
+                        // k == n-1: the last MIS weight is re-evaluated by the shift.
+                        bool last = g.k == j;
+                        path_sample_set_rc(s, path_pack_flags(j + 1u, g.k, true, g.kind, ls.is_delta),
+                                           g.rc_id, g.rc_bary, last ? ls.wi : g.rc_dir,
+                                           last ? ls.Li : g.suffix_f * f * ls.Li * w);
                         p_mixed = g.p_mixed * ls.pdf;
                     } else if (restir_reconnectable(cfg, j + 1u, rough_j, true, ls.dist)) {
                         // The light vertex itself is the reconnection vertex.
-                        s.flags = path_pack_flags(j + 1u, j + 1u, true, kind, ls.is_delta);
-                        s.rc_id = kind == RC_SURFACE ? l.index : ls.light;
-                        s.rc_bary = kind == RC_SURFACE
-                                        ? triangle_barycentrics(l.index, sh.sp.p + ls.wi * ls.dist)
-                                        : vec2(0.0);
-                        s.rc_dir = ls.wi;
-                        s.rc_Lo = vec3(0.0);
+                        bool tri = kind == RC_SURFACE;
+                        path_sample_set_rc(s, path_pack_flags(j + 1u, j + 1u, true, kind, ls.is_delta),
+                                           tri ? l.index : ls.light,
+                                           tri ? triangle_barycentrics(l.index, sh.sp.p + ls.wi * ls.dist)
+                                               : vec2(0.0),
+                                           ls.wi, vec3(0.0));
                         p_mixed = ls.pdf;
                         if (kind == RC_SURFACE) {
                             vec3 a, b, c;
@@ -191,11 +195,8 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                             p_mixed *= cos_l / (ls.dist * ls.dist);
                         }
                     } else {
-                        s.flags = path_pack_flags(j + 1u, 0u, true, RC_SURFACE, ls.is_delta);
-                        s.rc_id = 0u;
-                        s.rc_bary = vec2(0.0);
-                        s.rc_dir = vec3(0.0);
-                        s.rc_Lo = vec3(0.0);
+                        path_sample_set_rc(s, path_pack_flags(j + 1u, 0u, true, RC_SURFACE, ls.is_delta),
+                                           0u, vec2(0.0), vec3(0.0), vec3(0.0));
                         p_mixed = 1.0;
                     }
                     restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates);
@@ -236,31 +237,20 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
             s.light_pdf = light_pdf;
             float p_mixed;
             if (g.k != 0u) {
-                s.flags = path_pack_flags(j + 1u, g.k, false, g.kind, false);
-                s.rc_id = g.rc_id;
-                s.rc_bary = g.rc_bary;
-                if (g.k == j) {
-                    s.rc_dir = dn;
-                    s.rc_Lo = Le;
-                } else {
-                    s.rc_dir = g.rc_dir;
-                    s.rc_Lo = g.suffix_f * bs.f * Le * w;
-                }
+                bool last = g.k == j;
+                path_sample_set_rc(s, path_pack_flags(j + 1u, g.k, false, g.kind, false), g.rc_id,
+                                   g.rc_bary, last ? dn : g.rc_dir,
+                                   last ? Le : g.suffix_f * bs.f * Le * w);
                 p_mixed = g.p_mixed * bs.pdf;
             } else if (!delta && restir_reconnectable(cfg, j + 1u, rough_j, true, dist)) {
                 uint kind = found ? RC_SURFACE : RC_DIRECTION;
-                s.flags = path_pack_flags(j + 1u, j + 1u, false, kind, false);
-                s.rc_id = found ? hit.prim : scene_info.counts.w;
-                s.rc_bary = found ? hit.bary : vec2(0.0);
-                s.rc_dir = dn;
-                s.rc_Lo = vec3(0.0);
+                path_sample_set_rc(s, path_pack_flags(j + 1u, j + 1u, false, kind, false),
+                                   found ? hit.prim : scene_info.counts.w,
+                                   found ? hit.bary : vec2(0.0), dn, vec3(0.0));
                 p_mixed = bs.pdf * (found ? cos_next / (dist * dist) : 1.0);
             } else {
-                s.flags = path_pack_flags(j + 1u, 0u, false, RC_SURFACE, false);
-                s.rc_id = 0u;
-                s.rc_bary = vec2(0.0);
-                s.rc_dir = vec3(0.0);
-                s.rc_Lo = vec3(0.0);
+                path_sample_set_rc(s, path_pack_flags(j + 1u, 0u, false, RC_SURFACE, false), 0u,
+                                   vec2(0.0), vec3(0.0), vec3(0.0));
                 p_mixed = 1.0;
             }
             restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates);
