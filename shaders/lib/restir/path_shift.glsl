@@ -65,10 +65,13 @@ bool restir_reconnectable(RestirSettings cfg, uint k, bool rough_prev, bool roug
     return rough_prev && rough_k && dist >= cfg.dist_threshold;
 }
 
-Rng restir_vertex_rng(uvec4 seed, uint j) {
+// The random numbers of vertex x_j: counters 4j+1 .. 4j+4 of the replay stream, the same for
+// the path's generation and every replay of it.
+void restir_vertex_randoms(uvec4 seed, uint j, out vec3 u_light, out vec3 u_bsdf) {
     Rng r = rng_from_seed(seed);
     r.state.w = 4u * j;
-    return r;
+    u_light = vec3(rng_next2(r), rng_next(r));
+    u_bsdf = vec3(rng_next(r), rng_next2(r));
 }
 
 ShadingPoint restir_primary_shading(PrimaryHit ph) {
@@ -152,9 +155,8 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
         vec3 wo = shading_to_local(sh, -d);
         uint flags = bsdf_flags(sh.mat);
-        Rng rng = restir_vertex_rng(seed, j);
-        vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
-        vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+        vec3 u_light, u_bsdf;
+        restir_vertex_randoms(seed, j, u_light, u_bsdf);
 
         // NEE candidate: the path x1 .. xj, light (n = j + 1).
         if ((flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u) {
@@ -379,9 +381,8 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
             }
             // Pure replay: the last vertex is the NEE sample or the BSDF sample of x_{n-1}.
             vec3 wo = shading_to_local(sh, -d);
-            Rng rng = restir_vertex_rng(s.seed, j);
-            vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
-            vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+            vec3 u_light, u_bsdf;
+            restir_vertex_randoms(s.seed, j, u_light, u_bsdf);
             if (path_last_nee(s)) {
                 if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
                 LightSample ls = sample_light(sh.sp.p, u_light);
@@ -424,10 +425,8 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
         }
         // Replay the BSDF sample of x_j towards y_{j+1}.
         vec3 wo = shading_to_local(sh, -d);
-        Rng rng = restir_vertex_rng(s.seed, j);
-        rng_next2(rng);
-        rng_next(rng);
-        vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+        vec3 u_light, u_bsdf;
+        restir_vertex_randoms(s.seed, j, u_light, u_bsdf);
         BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
         if (!bsdf_sample_valid(bs)) break;
         bool delta = (bs.flags & BSDF_DELTA) != 0u;
