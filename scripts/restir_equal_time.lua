@@ -1,7 +1,7 @@
 -- restir_equal_time.lua: render graphs compared at equal GPU time against a PT reference,
--- with a static and with a moving camera. Default: PT (graphs/pt.json) vs ReSTIR PT
--- (graphs/restir_pt.json) on scenes/glossy_spheres.json and, when present,
--- ../shared/scenes/veach-ajar/scene.xml.
+-- with a static camera (converging), a still one and a moving one (single frames). Default:
+-- PT (graphs/pt.json) vs ReSTIR PT (graphs/restir_pt.json) on scenes/glossy_spheres.json and,
+-- when present, ../shared/scenes/veach-ajar/scene.xml.
 --
 --   loom run scripts/restir_equal_time.lua [width=128 height=128 budget_ms=4000 steps=5 ...]
 --   loom run scripts/restir_equal_time.lua configs=my_configs.json scenes=scenes/cornell_box.json
@@ -23,10 +23,12 @@
 --   first; one with `spp_param` sets it so that its frame time (calibrated on a few frames)
 --   matches the slowest of those. relMSE/MAPE of the last frame are averaged over `repeats`
 --   seeds (r:set_seed + r:reset, one renderer per configuration).
+-- still: as moving, with the camera at rest: the last of move_frames frames, single-frame
+--   estimates at equal time per frame (how Lin et al. 2022 compare ReSTIR PT with PT).
 -- Metrics: relMSE and MAPE (loom.metrics, eps 0.01) and relMSE without the worst `trim`
 -- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
 --
--- Arguments: scenes (comma list; missing files are skipped), cameras (static,moving), width,
+-- Arguments: scenes (comma list; missing files are skipped), cameras (static,still,moving), width,
 -- height, budget_ms, steps, move_frames, move_degrees, repeats, seed, ref_frames, ref_spp,
 -- ref_bounces (the estimators' maxBounces, 9), trim, configs, out. Scenes are looked up as
 -- given, then in the Loom source tree (so ../shared/scenes/... works from the repository root).
@@ -42,7 +44,7 @@ local move_degrees = loom.arg("move_degrees", 10.0)
 local repeats = loom.arg("repeats", 2)
 local seed = loom.arg("seed", 1)
 local out = loom.arg("out", "out/restir_equal_time")
-local cameras = loom.arg("cameras", {"static", "moving"})
+local cameras = loom.arg("cameras", {"static", "still", "moving"})
 local scenes = loom.arg("scenes", {"scenes/glossy_spheres.json",
                                    "../shared/scenes/veach-ajar/scene.xml"})
 local ref_frames, ref_spp = loom.arg("ref_frames", 16), loom.arg("ref_spp", 64)
@@ -198,7 +200,8 @@ for _, scene_arg in ipairs(scenes) do
 
     -- Moving camera: same frames for everyone. Configurations without spp_param run first; the
     -- others raise spp_param until their frame time matches the slowest of those.
-    if want.moving then
+    for _, kind in ipairs({"moving", "still"}) do
+    if want[kind] then
       local path = string.format("%s/%s_path.json", out, name)
       local order = {}
       for c, cfg in ipairs(configs) do if not cfg.spp_param then order[#order + 1] = c end end
@@ -207,9 +210,11 @@ for _, scene_arg in ipairs(scenes) do
       for _, c in ipairs(order) do
         local cfg = configs[c]
         local r = renderer(cfg, scene)
-        if not path_written then swing_path(r:camera(), path) end
-        path_written = true
-        r:camera_path(path)
+        if kind == "moving" then
+          if not path_written then swing_path(r:camera(), path) end
+          path_written = true
+          r:camera_path(path)
+        end
         r:set_time(0)
         local spp = 1
         if cfg.spp_param then
@@ -249,23 +254,24 @@ for _, scene_arg in ipairs(scenes) do
           sum_trim = sum_trim + trimmed_relmse(img, ref, trim)
           sum_mape = sum_mape + loom.metrics.mape(img, ref)
           if rep == 1 then
-            r:capture("tm.output", string.format("%s/%s_%s_moving.png", out, name,
-                                                 slug(cfg.name)))
+            r:capture("tm.output", string.format("%s/%s_%s_%s.png", out, name,
+                                                 slug(cfg.name), kind))
           end
         end
         r:close()
         if not cfg.spp_param then target_ms = math.max(target_ms, sum_ms / total_frames) end
-        local row = {index = #rows + 1, scene = name, camera = "moving", config = cfg.name,
+        local row = {index = #rows + 1, scene = name, camera = kind, config = cfg.name,
                      frames = total_frames, gpu_ms = sum_ms, spp = spp,
                      relmse = sum_relmse / repeats, relmse_trim = sum_trim / repeats,
                      mape = sum_mape / repeats}
         rows[#rows + 1] = row
-        summary[#summary + 1] = {scene = name, camera = "moving", config = cfg.name,
+        summary[#summary + 1] = {scene = name, camera = kind, config = cfg.name,
                                  frames = total_frames, gpu_ms = sum_ms, spp = spp,
                                  ms_per_frame = sum_ms / total_frames, relmse = row.relmse,
                                  relmse_trim = row.relmse_trim, mape = row.mape}
-        loom.progress(#summary, #summary, name .. " moving")
+        loom.progress(#summary, #summary, name .. " " .. kind)
       end
+    end
     end
   end
   ::next_scene::
@@ -281,8 +287,8 @@ for _, row in ipairs(summary) do
   end
 end
 
-print(string.format("\nequal time at %dx%d: static %.0f GPU ms per configuration; moving %d "
-                    .. "frames x %d repeats", width, height, budget, move_frames, repeats))
+print(string.format("\nequal time at %dx%d: static %.0f GPU ms per configuration; still/moving "
+                    .. "%d frames x %d repeats", width, height, budget, move_frames, repeats))
 util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
                   {key = "frames", fmt = "%d"}, {key = "spp", fmt = "%d"},
                   {key = "gpu_ms", title = "GPU ms", fmt = "%.0f"},

@@ -19,6 +19,10 @@ public:
             .doc("per-pixel primary hit (camera vertex + triangle/barycentrics)");
         r.param("candidates", 1).range(1, 64).doc("paths per pixel resampled into the reservoir");
         r.param("maxBounces", 9).range(1, 14).doc("scattering events per path (PathTracer's)");
+        r.param("rrDepth", 5)
+            .range(1, 64)
+            .doc("Russian roulette from this vertex on, after the reconnection vertex only "
+                 "(PathTracer's rrDepth)");
         r.paramEnum("shift", "hybrid", {"hybrid", "reconnection", "replay"})
             .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
         r.param("roughnessThreshold", 0.2)
@@ -60,7 +64,8 @@ public:
             .set("roughThreshold", float(param<double>("roughnessThreshold")))
             .set("distThreshold", float(param<double>("distanceThreshold")))
             .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
-            .set("area", uint32_t(param<std::string>("reuse") == "area"));
+            .set("area", uint32_t(param<std::string>("reuse") == "area"))
+            .set("rrDepth", uint32_t(param<int>("rrDepth")));
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mRayCounter.read(gpu); }

@@ -136,6 +136,15 @@ TEST(ReSTIRPT, UnbiasedCornellMovingCamera) {
     EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
+// Russian roulette from the first vertex after the reconnection vertex (the default starts at
+// vertex 5, which short test paths rarely reach): survival decisions belong to the pixel's
+// source density, never to the integrand that shifts carry.
+TEST(ReSTIRPT, UnbiasedWithRussianRouletteInTheSuffix) {
+    auto c = compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json",
+                                  {{"initial.rrDepth", 1}}, 0.0f);
+    EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
+}
+
 TEST(ReSTIRPT, UnbiasedGlossyMovingCamera) {
     auto c =
         compareWithReference(sourcePath("scenes/glossy_spheres.json"), "restir_pt.json", {}, 2.0f);

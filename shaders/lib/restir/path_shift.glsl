@@ -1,8 +1,9 @@
 // ReSTIR PT paths (Lin et al. 2022, Sec. 5-6): candidate generation along one path tree (every
 // NEE sample and every emitter hit is a candidate, resampled by streaming RIS), and the shift
 // of a stored path to another pixel's primary hit by random replay, reconnection or the hybrid
-// of both. Paths are the ones PathTracer samples (same NEE + BSDF MIS, same maximum length, no
-// Russian roulette), so the mean of a ReSTIR estimator equals the reference path tracer's.
+// of both. Paths are the ones PathTracer samples (same NEE + BSDF MIS, same maximum length;
+// Russian roulette only after the reconnection vertex, where shifts never replay), so the mean
+// of a ReSTIR estimator equals the reference path tracer's.
 //
 // Reconnection vertex (hybrid shift, Lin et al. Sec. 6.2): the first x_k, k >= 2, such that
 // x_{k-1} and x_k are both rough (no delta lobe, alpha > rough_threshold; the last vertex of a
@@ -93,9 +94,16 @@ vec2 triangle_barycentrics(uint prim, vec3 p) {
     return vec2(d22 * dv1 - d12 * dv2, d11 * dv2 - d12 * dv1) / det;
 }
 
+// The shadow ray from p (geometric normal ng) along dir over dist (>= 1e29: unbounded).
+void restir_visibility_ray(vec3 p, vec3 ng, vec3 dir, float dist, out vec3 o, out float tmax) {
+    o = offset_ray_origin(p, ng, dir);
+    tmax = dist < 1e29 ? dist * (1.0 - 1e-4) : 1e30;
+}
+
 bool restir_visible(vec3 p, vec3 ng, vec3 dir, float dist) {
-    vec3 o = offset_ray_origin(p, ng, dir);
-    float tmax = dist < 1e29 ? dist * (1.0 - 1e-4) : 1e30;
+    vec3 o;
+    float tmax;
+    restir_visibility_ray(p, ng, dir, dist, o, tmax);
     return !trace_any(o, dir, 0.0, tmax, BVH_MASK_ALL);
 }
 
@@ -124,21 +132,27 @@ void path_sample_set_rc(inout PathSample s, uint flags, uint rc_id, vec2 rc_bary
     s.rc_Lo = rc_Lo;
 }
 
+// C = F / p_mixed (the integrand over the sampling density); rr_weight = 1 / (Russian roulette
+// survival probabilities): part of the source density, never of F.
 void restir_stream_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, vec3 C,
-                             float p_mixed, float inv_candidates) {
-    float w = luminance(C) * inv_candidates;
+                             float p_mixed, float inv_candidates, float rr_weight) {
+    float w = luminance(C) * inv_candidates * rr_weight;
     vec3 F = C * p_mixed;
     reservoir_add(r, s, F, luminance(F), w, rng_next(rng_sel));
 }
 
-// Returns the number of rays traced.
+// Returns the number of rays traced. Russian roulette from vertex rr_depth on, only once the
+// reconnection vertex x_k is behind: the suffix after x_k is never replayed (shifts keep its
+// directions and cached radiance), so a termination decision there is a sampling choice of
+// this pixel only; the prefix that shifts replay never depends on throughput.
 uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_lens,
-                     float inv_candidates, inout PathReservoir r, inout Rng rng_sel) {
+                     float inv_candidates, uint rr_depth, inout PathReservoir r, inout Rng rng_sel) {
     uint rays = 0u;
     if (!primary_valid(ph) || cfg.max_bounces == 0u) return rays;
     ShadingPoint sh = restir_primary_shading(ph);
     vec3 d = normalize(sh.sp.p - ph.camera.xyz);
     vec3 beta = vec3(1.0);
+    float rr_weight = 1.0;
     GenState g;
     g.k = 0u;
     g.kind = RC_SURFACE;
@@ -201,7 +215,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                                            0u, vec2(0.0), vec3(0.0), vec3(0.0));
                         p_mixed = 1.0;
                     }
-                    restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates);
+                    restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates, rr_weight);
                 }
             }
         }
@@ -211,6 +225,13 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
         if (!bsdf_sample_valid(bs)) break;
         bool delta = (bs.flags & BSDF_DELTA) != 0u;
         vec3 beta_next = beta * bsdf_sample_weight(bs);
+        if (g.k != 0u && j >= rr_depth) {
+            // Survival probability on the throughput, as PathTracer's Russian roulette.
+            vec3 b = beta_next * rr_weight;
+            float q = min(max(b.r, max(b.g, b.b)), 0.95);
+            if (rng_next(rng_sel) >= q) break;
+            rr_weight /= q;
+        }
         vec3 dn = shading_to_world(sh, bs.wi);
         vec3 o = offset_ray_origin(sh.sp.p, sh.sp.ng, dn);
         Hit hit;
@@ -255,7 +276,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                                    vec2(0.0), vec3(0.0), vec3(0.0));
                 p_mixed = 1.0;
             }
-            restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates);
+            restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates, rr_weight);
         }
         if (!found || j == cfg.max_bounces) break;
 
@@ -290,74 +311,92 @@ float restir_last_mis(RestirSettings cfg, PathSample s, float light_pdf, float b
                             : mis_weight(bsdf_pdf_, light_pdf, cfg.mis_heuristic);
 }
 
-// Reconnect y (the offset path's x_{k-1}, shading point sy, incoming direction d) to the stored
-// x_k and evaluate everything from y on. beta = prefix throughput (f/p) up to y.
-vec3 restir_reconnect(RestirSettings cfg, PathSample s, ShadingPoint sy, vec3 d, vec3 beta,
-                      inout uint rays) {
+// Reconnection of y (the offset path's x_{k-1}, shading point sy, incoming direction d) to the
+// stored x_k, split around its visibility ray: begin evaluates everything that needs no ray
+// (false: the shift fails without one), end finishes once y -> x_k is known to be unoccluded.
+struct Reconnection {
+    ShadingPoint sk;  // x_k (surface kind)
+    vec3 dir;         // y -> x_k
+    vec3 f;           // BSDF at y
+    vec3 G_Le;        // k == n: what the light contributes to the segment (Le * G or I / d^2)
+    float light_pdf;
+    float bsdf_pdf;   // at y towards x_k
+};
+
+bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, vec3 d,
+                            out Reconnection rc, out vec3 ray_o, out float ray_tmax) {
     uint n = path_length(s), k = path_rc_index(s);
     vec3 wo = shading_to_local(sy, -d);
     uint kind = path_rc_kind(s);
-    vec3 dir;
     float dist;
-    vec3 G_Le;   // k == n: what the light contributes to the segment (Le * G or intensity / d^2)
-    float light_pdf = 0.0;
-    ShadingPoint sk;
+    rc.light_pdf = 0.0;
     if (kind == RC_SURFACE) {
         Hit h;
         h.t = 0.0;
         h.prim = s.rc_id;
         h.bary = s.rc_bary;
-        sk = shading_point(h);
+        rc.sk = shading_point(h);
         // Same segment geometry as the sampler: BSDF rays leave from the offset origin, light
         // samples from the surface point itself.
         vec3 o = sy.sp.p;
         if (!(k == n && path_last_nee(s)))
-            o = offset_ray_origin(sy.sp.p, sy.sp.ng, normalize(sk.sp.p - sy.sp.p));
-        vec3 v = sk.sp.p - o;
+            o = offset_ray_origin(sy.sp.p, sy.sp.ng, normalize(rc.sk.sp.p - sy.sp.p));
+        vec3 v = rc.sk.sp.p - o;
         dist = length(v);
-        dir = v / dist;
-        if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return vec3(0.0);
-        float G = abs(dot(sk.sp.ng, dir)) / (dist * dist);
+        rc.dir = v / dist;
+        if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return false;
+        float G = abs(dot(rc.sk.sp.ng, rc.dir)) / (dist * dist);
         if (k == n) {
-            G_Le = emitted_radiance(sk.sp.shape, sk.sp.ng, dir) * G;
-            light_pdf = light_pdf_triangle(sy.sp.p, s.rc_id, sk.sp.p, sk.sp.ng);
+            rc.G_Le = emitted_radiance(rc.sk.sp.shape, rc.sk.sp.ng, rc.dir) * G;
+            rc.light_pdf = light_pdf_triangle(sy.sp.p, s.rc_id, rc.sk.sp.p, rc.sk.sp.ng);
         } else {
-            G_Le = vec3(G);
+            rc.G_Le = vec3(G);
         }
+        dist *= 1.0 - 1e-3;
     } else if (kind == RC_DIRECTION) {
-        dir = s.rc_dir;
+        rc.dir = s.rc_dir;
         dist = 1e30;
         LightGpu l = scene_lights[s.rc_id];
         if (l.type == LIGHT_DIRECTIONAL) {
-            G_Le = l.p1.rgb;
+            rc.G_Le = l.p1.rgb;
         } else {
-            G_Le = environment_radiance(dir);
-            light_pdf = light_pdf_environment(dir);
+            rc.G_Le = environment_radiance(rc.dir);
+            rc.light_pdf = light_pdf_environment(rc.dir);
         }
     } else {
         LightGpu l = scene_lights[s.rc_id];
-        G_Le = point_light_incident(l, sy.sp.p, dir, dist);
-        if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return vec3(0.0);
+        rc.G_Le = point_light_incident(l, sy.sp.p, rc.dir, dist);
+        if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return false;
     }
-    vec3 wi = shading_to_local(sy, dir);
-    vec3 f = bsdf_eval(sy.mat, wo, wi);
-    if (all(equal(f, vec3(0.0))) || all(equal(G_Le, vec3(0.0)))) return vec3(0.0);
-    ++rays;
-    if (!restir_visible(sy.sp.p, sy.sp.ng, dir, kind == RC_SURFACE ? dist * (1.0 - 1e-3) : dist))
-        return vec3(0.0);
-    if (k == n) {
-        float w = restir_last_mis(cfg, s, light_pdf, bsdf_pdf(sy.mat, wo, wi));
-        return beta * f * G_Le * w;
-    }
-    // x_k scatters towards the stored direction; re-evaluate its BSDF (and the last MIS weight
-    // when the next vertex is the last one) for the new incoming direction.
-    vec3 wo_k = shading_to_local(sk, -dir);
-    vec3 wi_k = shading_to_local(sk, s.rc_dir);
-    vec3 f_k = bsdf_eval(sk.mat, wo_k, wi_k);
-    float w = k + 1u == n ? restir_last_mis(cfg, s, s.light_pdf, bsdf_pdf(sk.mat, wo_k, wi_k)) : 1.0;
-    return beta * f * G_Le * f_k * s.rc_Lo * w;
+    vec3 wi = shading_to_local(sy, rc.dir);
+    rc.f = bsdf_eval(sy.mat, wo, wi);
+    if (all(equal(rc.f, vec3(0.0))) || all(equal(rc.G_Le, vec3(0.0)))) return false;
+    rc.bsdf_pdf = k == n ? bsdf_pdf(sy.mat, wo, wi) : 0.0;
+    restir_visibility_ray(sy.sp.p, sy.sp.ng, rc.dir, dist, ray_o, ray_tmax);
+    return true;
 }
 
+// beta = prefix throughput (f/p) up to y.
+vec3 restir_reconnect_end(RestirSettings cfg, PathSample s, Reconnection rc, vec3 beta) {
+    uint n = path_length(s), k = path_rc_index(s);
+    if (k == n) return beta * rc.f * rc.G_Le * restir_last_mis(cfg, s, rc.light_pdf, rc.bsdf_pdf);
+    // x_k scatters towards the stored direction; re-evaluate its BSDF (and the last MIS weight
+    // when the next vertex is the last one) for the new incoming direction.
+    vec3 wo_k = shading_to_local(rc.sk, -rc.dir);
+    vec3 wi_k = shading_to_local(rc.sk, s.rc_dir);
+    vec3 f_k = bsdf_eval(rc.sk.mat, wo_k, wi_k);
+    float w = k + 1u == n ? restir_last_mis(cfg, s, s.light_pdf, bsdf_pdf(rc.sk.mat, wo_k, wi_k)) : 1.0;
+    return beta * rc.f * rc.G_Le * f_k * s.rc_Lo * w;
+}
+
+// Steps of a shift; each traces exactly one ray.
+const uint SHIFT_STEP_PREFIX = 0u;     // replay x_j's BSDF sample towards y_{j+1}
+const uint SHIFT_STEP_RECONNECT = 1u;  // visibility y_{k-1} -> x_k
+const uint SHIFT_STEP_LAST_NEE = 2u;   // pure replay: the last vertex is x_{n-1}'s NEE sample
+const uint SHIFT_STEP_LAST_BSDF = 3u;  // pure replay: the last vertex is its BSDF sample
+
+// Every ray of a shift goes through the one traversal in the loop below (lavapipe compiles each
+// inlined BVH traversal separately: code size is speed).
 vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
     uint n = path_length(s), k = path_rc_index(s);
     if (n < 2u || !primary_valid(dst)) return vec3(0.0);
@@ -365,7 +404,6 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
     if (reconnect) atomicAdd(shift_attempts_reconnect, 1u);
     else atomicAdd(shift_attempts_replay, 1u);
     if (!reconnect && cfg.shift == SHIFT_RECONNECTION) return vec3(0.0);
-    uint rays = 0u;
     ShadingPoint sh = restir_primary_shading(dst);
     vec3 d = normalize(sh.sp.p - dst.camera.xyz);
     vec3 beta = vec3(1.0);
@@ -373,76 +411,82 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
     vec3 result = vec3(0.0);
     for (uint j = 1u;; ++j) {
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
-        if (j == last_replayed) {
-            if (reconnect) {
-                if (!restir_reconnectable(cfg, k, rough_j, true, 1e30)) break;
-                result = restir_reconnect(cfg, s, sh, d, beta, rays);
-                break;
-            }
-            // Pure replay: the last vertex is the NEE sample or the BSDF sample of x_{n-1}.
-            vec3 wo = shading_to_local(sh, -d);
-            vec3 u_light, u_bsdf;
-            restir_vertex_randoms(s.seed, j, u_light, u_bsdf);
-            if (path_last_nee(s)) {
-                if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
-                LightSample ls = sample_light(sh.sp.p, u_light);
-                if (!(ls.pdf > 0.0)) break;
-                if (restir_reconnectable(cfg, n, rough_j, true, ls.dist)) break;  // not invertible
+        vec3 wo = shading_to_local(sh, -d);
+        uint step = j < last_replayed ? SHIFT_STEP_PREFIX
+                  : reconnect         ? SHIFT_STEP_RECONNECT
+                  : path_last_nee(s)  ? SHIFT_STEP_LAST_NEE
+                                      : SHIFT_STEP_LAST_BSDF;
+        vec3 u_light, u_bsdf;
+        restir_vertex_randoms(s.seed, j, u_light, u_bsdf);
+        vec3 ray_o, ray_d;
+        float ray_tmax = 1e30;
+        Reconnection rc;
+        LightSample ls;
+        BsdfSample bs;
+        vec3 f_nee;
+        if (step == SHIFT_STEP_RECONNECT) {
+            if (!restir_reconnectable(cfg, k, rough_j, true, 1e30)) break;
+            if (!restir_reconnect_begin(cfg, s, sh, d, rc, ray_o, ray_tmax)) break;
+            ray_d = rc.dir;
+        } else if (step == SHIFT_STEP_LAST_NEE) {
+            if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
+            ls = sample_light(sh.sp.p, u_light);
+            if (!(ls.pdf > 0.0)) break;
+            if (restir_reconnectable(cfg, n, rough_j, true, ls.dist)) break;  // not invertible
+            f_nee = bsdf_eval(sh.mat, wo, shading_to_local(sh, ls.wi));
+            if (all(equal(f_nee, vec3(0.0))) || all(equal(ls.Li, vec3(0.0)))) break;
+            restir_visibility_ray(sh.sp.p, sh.sp.ng, ls.wi, ls.dist, ray_o, ray_tmax);
+            ray_d = ls.wi;
+        } else {
+            // Replay the BSDF sample of x_j towards y_{j+1}.
+            bs = bsdf_sample(sh.mat, wo, u_bsdf);
+            if (!bsdf_sample_valid(bs)) break;
+            ray_d = shading_to_world(sh, bs.wi);
+            ray_o = offset_ray_origin(sh.sp.p, sh.sp.ng, ray_d);
+        }
+        bool any_hit = step == SHIFT_STEP_RECONNECT || step == SHIFT_STEP_LAST_NEE;
+        Hit hit;
+        bool found = bvh_traverse(ray_o, ray_d, 0.0, ray_tmax, BVH_MASK_ALL, any_hit, hit);
+        if (any_hit) {
+            if (found) break;  // occluded
+            if (step == SHIFT_STEP_RECONNECT) {
+                result = restir_reconnect_end(cfg, s, rc, beta);
+            } else {
                 vec3 wi = shading_to_local(sh, ls.wi);
-                vec3 f = bsdf_eval(sh.mat, wo, wi);
-                if (all(equal(f, vec3(0.0))) || all(equal(ls.Li, vec3(0.0)))) break;
-                ++rays;
-                if (!restir_visible(sh.sp.p, sh.sp.ng, ls.wi, ls.dist)) break;
                 float w = ls.is_delta ? 1.0
                                       : mis_weight(ls.pdf, bsdf_pdf(sh.mat, wo, wi), cfg.mis_heuristic);
-                result = beta * f * ls.Li * (w / ls.pdf);
-            } else {
-                BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
-                if (!bsdf_sample_valid(bs)) break;
-                bool delta = (bs.flags & BSDF_DELTA) != 0u;
-                vec3 dn = shading_to_world(sh, bs.wi);
-                Hit hit;
-                ++rays;
-                bool found = trace_closest(offset_ray_origin(sh.sp.p, sh.sp.ng, dn), dn, 0.0, 1e30,
-                                           BVH_MASK_ALL, hit);
-                vec3 Le;
-                float light_pdf, dist = 1e30;
-                if (found) {
-                    ShadingPoint sn = shading_point(hit);
-                    dist = length(sn.sp.p - offset_ray_origin(sh.sp.p, sh.sp.ng, dn));
-                    Le = any(greaterThan(sn.emission, vec3(0.0)))
-                             ? emitted_radiance(sn.sp.shape, sn.sp.ng, dn) : vec3(0.0);
-                    light_pdf = light_pdf_triangle(sh.sp.p, hit.prim, sn.sp.p, sn.sp.ng);
-                } else {
-                    Le = environment_radiance(dn);
-                    light_pdf = light_pdf_environment(dn);
-                }
-                if (!delta && restir_reconnectable(cfg, n, rough_j, true, dist)) break;
-                float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
-                result = beta * bsdf_sample_weight(bs) * Le * w;
+                result = beta * f_nee * ls.Li * (w / ls.pdf);
             }
             break;
         }
-        // Replay the BSDF sample of x_j towards y_{j+1}.
-        vec3 wo = shading_to_local(sh, -d);
-        vec3 u_light, u_bsdf;
-        restir_vertex_randoms(s.seed, j, u_light, u_bsdf);
-        BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
-        if (!bsdf_sample_valid(bs)) break;
         bool delta = (bs.flags & BSDF_DELTA) != 0u;
-        vec3 dn = shading_to_world(sh, bs.wi);
-        Hit hit;
-        ++rays;
-        if (!trace_closest(offset_ray_origin(sh.sp.p, sh.sp.ng, dn), dn, 0.0, 1e30, BVH_MASK_ALL, hit))
+        if (step == SHIFT_STEP_LAST_BSDF) {
+            vec3 Le;
+            float light_pdf, dist = 1e30;
+            if (found) {
+                ShadingPoint sn = shading_point(hit);
+                dist = length(sn.sp.p - ray_o);
+                Le = any(greaterThan(sn.emission, vec3(0.0)))
+                         ? emitted_radiance(sn.sp.shape, sn.sp.ng, ray_d) : vec3(0.0);
+                light_pdf = light_pdf_triangle(sh.sp.p, hit.prim, sn.sp.p, sn.sp.ng);
+            } else {
+                Le = environment_radiance(ray_d);
+                light_pdf = light_pdf_environment(ray_d);
+            }
+            if (!delta && restir_reconnectable(cfg, n, rough_j, true, dist)) break;
+            float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
+            result = beta * bsdf_sample_weight(bs) * Le * w;
             break;
+        }
+        if (!found) break;
         ShadingPoint sn = shading_point(hit);
         // The offset path must not find an earlier reconnection vertex than the base path.
         if (!delta && restir_reconnectable(cfg, j + 1u, rough_j,
                                            restir_vertex_rough(sn.mat, cfg.rough_threshold),
-                                           length(sn.sp.p - offset_ray_origin(sh.sp.p, sh.sp.ng, dn))))
+                                           length(sn.sp.p - ray_o)))
             break;
         beta *= bsdf_sample_weight(bs);
-        d = dn;
+        d = ray_d;
         sh = sn;
     }
     bool ok = any(greaterThan(result, vec3(0.0))) && !any(isnan(result)) && !any(isinf(result));

@@ -28,6 +28,7 @@ layout(push_constant) uniform Params {
     float distThreshold;
     uint misHeuristic;
     uint area;
+    uint rrDepth;
 } pc;
 
 void main() {
@@ -63,7 +64,7 @@ void main() {
         float inv = 1.0 / float(pc.candidates);
         for (uint c = 0u; c < pc.candidates; ++c) {
             uvec4 seed = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x9E3779B1u * (c + 1u))).state;
-            rays += restir_generate(cfg, ph, seed, smp, inv, r, rng_sel);
+            rays += restir_generate(cfg, ph, seed, smp, inv, pc.rrDepth, r, rng_sel);
         }
         r.M = float(pc.candidates);
     }
