@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # PT (graphs/pt.json) vs ReSTIR PT (graphs/restir_pt.json) at equal GPU time against a 9-bounce
-# path-traced reference, static and moving camera, on scenes/glossy_spheres.json and (when
-# ../shared/scenes is there) veach-ajar; then the GPU ms of each ReSTIR PT stage at 256x256.
+# path-traced reference: static camera (accumulated, converging), still and moving camera (the
+# last single frame of a 16-frame sequence at equal time per frame, REPEATS seeds), on
+# scenes/glossy_spheres.json and (when ../shared/scenes is there) veach-ajar; then the GPU ms of
+# each ReSTIR PT stage at 256x256.
 # Prints tables; never asserts. Run from anywhere; BUILD defaults to build-bench.
 #
 #   bash bench/restir_equal_time.sh                 # 128x128, 6 s GPU per configuration
@@ -22,7 +24,7 @@ cd "$ROOT"
 [ -x "$LOOM" ] || { echo "build loom first: cmake -S . -B build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release && ninja -C build-bench loom" >&2; exit 2; }
 uptime
 "$LOOM" run scripts/restir_equal_time.lua width="${WIDTH:-128}" height="${HEIGHT:-128}" \
-    budget_ms="${BUDGET_MS:-6000}" steps=5 move_frames=16 repeats=2 ref_frames=32 ref_spp=64 \
+    budget_ms="${BUDGET_MS:-6000}" steps=5 move_frames=16 repeats="${REPEATS:-8}" ref_frames=32 ref_spp=64 \
     out=out/restir_equal_time
 for scene in scenes/glossy_spheres.json ../shared/scenes/veach-ajar/scene.xml; do
     [ -e "$scene" ] || continue

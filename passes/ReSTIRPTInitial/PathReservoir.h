@@ -14,7 +14,8 @@ constexpr uint64_t kSettingsBytes = 32;    // RestirSettings header of a reservo
 constexpr uint64_t kReservoirBytes = 112;  // PathReservoir
 constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 
-// Shift attempt/success counters (RestirCounters in path_shift.glsl), exposed as pass stats.
+// Shift attempt/success and ray counters (RestirCounters in path_shift.glsl), exposed as pass
+// stats.
 class ShiftCounters {
 public:
     std::shared_ptr<gpu::Buffer> reset(gpu::Context& gpu, gpu::CommandList& cmd) {
@@ -27,11 +28,12 @@ public:
                 {"shiftSuccessReconnect", mCounters[1]},
                 {"shiftAttemptsReplay", mCounters[2]},
                 {"shiftSuccessReplay", mCounters[3]},
-                {"reconnectShare", attempts > 0 ? mCounters[0] / attempts : 0.0}};
+                {"reconnectShare", attempts > 0 ? mCounters[0] / attempts : 0.0},
+                {"rays", mCounters[4]}};
     }
 
 private:
-    gpu::CounterBuffer<4> mCounters{"RestirCounters"};
+    gpu::CounterBuffer<5> mCounters{"RestirCounters"};
 };
 
 }  // namespace loom::restir

@@ -21,8 +21,9 @@ public:
         r.param("maxBounces", 9).range(1, 14).doc("scattering events per path (PathTracer's)");
         r.param("rrDepth", 5)
             .range(1, 64)
-            .doc("Russian roulette from this vertex on, after the reconnection vertex only "
-                 "(PathTracer's rrDepth)");
+            .doc(
+                "Russian roulette from this vertex on, after the reconnection vertex only "
+                "(PathTracer's rrDepth)");
         r.paramEnum("shift", "hybrid", {"hybrid", "reconnection", "replay"})
             .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
         r.param("roughnessThreshold", 0.2)

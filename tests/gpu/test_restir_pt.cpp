@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <random>
 
 #include "core/graph/Renderer.h"
@@ -275,7 +276,7 @@ std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
                {"primary", {{"glsl", "PrimaryIn"}, {"kind", "buffer"}}}}},
              {"outputs", {{"check", {{"glsl", "checkImage"}, {"format", "rgba32f"}}}}},
              {"persistent",
-              {{"counters", {{"glsl", "RestirCounters"}, {"kind", "buffer"}, {"bytes", 16}}}}}}}}}},
+              {{"counters", {{"glsl", "RestirCounters"}, {"kind", "buffer"}, {"bytes", 20}}}}}}}}}},
         {"edges", json::array({json::array({"gbuffer.vbuffer", "initial.vbuffer"}),
                                json::array({"gbuffer.sample", "initial.sample"}),
                                json::array({"initial.reservoirs", "check.reservoirs"}),
@@ -334,6 +335,30 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
             }
             EXPECT_GT(neighbourOk, samples / 4);
         }
+    }
+}
+
+// The counters the reuse passes expose to Lua and the inspector are consistent: attempts by
+// kind, successes within attempts, and at least one ray per successful shift.
+TEST(ReSTIRPT, ShiftCountersAreConsistent) {
+    Renderer r(test::gpuContext(), restirGraph("restir_pt.json"), 32, 32, 1);
+    r.loadScene(sourcePath("scenes/glossy_spheres.json"));
+    for (int f = 0; f < 3; ++f) r.frame();
+    for (const char* name : {"temporal", "spatial"}) {
+        SCOPED_TRACE(name);
+        std::map<std::string, double> st;
+        for (auto& p : r.graph().passes())
+            if (p->name() == name) st = p->stats();
+        ASSERT_TRUE(st.count("rays"));
+        double attempts = st["shiftAttemptsReconnect"] + st["shiftAttemptsReplay"];
+        double successes = st["shiftSuccessReconnect"] + st["shiftSuccessReplay"];
+        EXPECT_GT(st["shiftAttemptsReconnect"], 0);
+        EXPECT_GT(st["shiftAttemptsReplay"], 0);  // the glossy spheres need replay
+        EXPECT_LE(st["shiftSuccessReconnect"], st["shiftAttemptsReconnect"]);
+        EXPECT_LE(st["shiftSuccessReplay"], st["shiftAttemptsReplay"]);
+        EXPECT_GT(successes, 0.25 * attempts);
+        EXPECT_GE(st["rays"], successes);
+        EXPECT_NEAR(st["reconnectShare"], st["shiftAttemptsReconnect"] / attempts, 1e-9);
     }
 }
 

@@ -32,6 +32,7 @@ PrimaryHit restir_domain_primary(RestirSettings cfg, PathSample s, PrimaryHit pi
     PrimaryHit ph;
     ph.camera = vec4(o, 1.0);
     Hit hit;
+    atomicAdd(shift_rays, 1u);
     if (trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit))
         ph.hit = uvec4(hit.prim, floatBitsToUint(hit.bary), 0u);
     else
@@ -88,6 +89,7 @@ bool restir_primary_reconnect(PathSample s, PrimaryHit src, ivec2 src_pixel, Cam
     // The new primary segment must be unoccluded.
     vec3 v = x1.p - Ly;
     float dist = length(v);
+    atomicAdd(shift_rays, 1u);
     if (trace_any(Ly, v / dist, 0.0, dist * (1.0 - 1e-3), BVH_MASK_ALL)) return false;
     vec3 Lx = src.camera.xyz;
     J = projection_area_ratio(Px, Lx, cx.forward, x1.p, x1.ng) *

@@ -31,6 +31,7 @@ layout(std430) buffer RestirCounters {
     uint shift_success_reconnect;
     uint shift_attempts_replay;
     uint shift_success_replay;
+    uint shift_rays;  // rays traced by shifts (and by the domain changes of path_reuse.glsl)
 };
 
 // Solid-angle Jacobian of reconnecting to x_k from a new predecessor (Lin et al. Eq. 17;
@@ -409,6 +410,7 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
     vec3 beta = vec3(1.0);
     uint last_replayed = reconnect ? k - 1u : n - 1u;
     vec3 result = vec3(0.0);
+    uint rays = 0u;
     for (uint j = 1u;; ++j) {
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
         vec3 wo = shading_to_local(sh, -d);
@@ -445,6 +447,7 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
             ray_o = offset_ray_origin(sh.sp.p, sh.sp.ng, ray_d);
         }
         bool any_hit = step == SHIFT_STEP_RECONNECT || step == SHIFT_STEP_LAST_NEE;
+        ++rays;
         Hit hit;
         bool found = bvh_traverse(ray_o, ray_d, 0.0, ray_tmax, BVH_MASK_ALL, any_hit, hit);
         if (any_hit) {
@@ -489,6 +492,7 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
         d = ray_d;
         sh = sn;
     }
+    atomicAdd(shift_rays, rays);
     bool ok = any(greaterThan(result, vec3(0.0))) && !any(isnan(result)) && !any(isinf(result));
     if (ok) {
         if (reconnect) atomicAdd(shift_success_reconnect, 1u);
