@@ -423,6 +423,12 @@ void SceneGpu::updateShapes(float time, bool firstFrame) {
     mStats.bvhNodes = build.stats.nodes;
 }
 
+bool SceneGpu::shapesMoved() const {
+    for (const MovingShape& m : mImpl->moving)
+        if (m.prev != m.now) return true;
+    return false;
+}
+
 void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
     if (!mCameraDirty && time == mTime && width == mWidth && height == mHeight) return;
     auto& info = mImpl->infoData;

@@ -11,7 +11,8 @@
 namespace loom::scene {
 
 struct SceneStats {
-    size_t triangles = 0, shapes = 0, materials = 0, textures = 0, lights = 0, emissiveTriangles = 0;
+    size_t triangles = 0, shapes = 0, materials = 0, textures = 0, lights = 0,
+           emissiveTriangles = 0;
     size_t bvhNodes = 0;
     double buildMs = 0.0;
 };
@@ -32,6 +33,9 @@ public:
 
     const Scene& cpu() const { return mScene; }
     const SceneStats& stats() const { return mStats; }
+    // Whether a shape moved between the previous frame time and this one: temporal reuse then
+    // evaluates previous-frame targets again in this frame's geometry (ReSTIRPTTemporal).
+    bool shapesMoved() const;
     // Changes whenever the camera or frame time changes: passes with history reset on it.
     uint64_t revision() const { return mRevision; }
     // World-space bounding sphere.

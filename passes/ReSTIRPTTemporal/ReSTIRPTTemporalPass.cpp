@@ -68,7 +68,8 @@ public:
             .set("areaVariant", uint32_t(areaVariant()))
             .set("confidenceCap", float(param<double>("confidenceCap")))
             .set("normalThreshold", float(param<double>("normalThreshold")))
-            .set("depthThreshold", float(param<double>("depthThreshold")));
+            .set("depthThreshold", float(param<double>("depthThreshold")))
+            .set("shapesMoved", uint32_t(ctx.scene().shapesMoved()));
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }

@@ -36,6 +36,7 @@ layout(push_constant) uniform Params {
     float confidenceCap;
     float normalThreshold;
     float depthThreshold;
+    uint shapesMoved;  // the scene's shapes moved since the previous frame
 } pc;
 
 // Area ReSTIR temporal reprojection (Zhang et al. 2024, Sec. 5). Samples carry film positions, so
@@ -62,8 +63,18 @@ uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 
 // Shift jobs, all run through one restir_shift call site (lavapipe compiles every inlined copy
 // of the shift and its BVH traversals separately: code size is speed). Job 0: the canonical
-// sample to its previous-frame partner; jobs 1..: previous samples to this pixel.
-const uint MAX_JOBS = 5u;
+// sample to its previous-frame partner; jobs 1..: previous samples to this pixel; when shapes
+// moved, then each of those previous samples at its own previous pixel.
+//
+// Moving shapes: only this frame's geometry is on the GPU, so the canonical sample's target in
+// the previous domain (job 0) is evaluated in it. The MIS weights stay a partition of unity
+// only if the previous samples' own targets come from the same function, so they are evaluated
+// again in this geometry instead of using the stored ones (exact for a static scene, where both
+// agree and the extra shifts are skipped). What remains approximate is the support: a path that
+// exists now but was blocked in the previous frame's geometry still lowers the canonical
+// weight.
+const uint MAX_PREV_JOBS = 4u;
+const uint MAX_JOBS = 1u + 2u * MAX_PREV_JOBS;
 struct ShiftJob {
     PathSample s;
     uint prev;        // 1: destination is a previous-frame pixel
@@ -177,6 +188,20 @@ void main() {
         }
     }
 
+    // Moving shapes: re-evaluate each previous sample's target in its own domain (job n_prev + j - 1
+    // for job j).
+    uint n_prev = n_jobs;
+    if (pc.shapesMoved != 0u) {
+        for (uint j = 1u; j < n_prev; ++j) {
+            ivec2 q = slot_q[jobs[j].source];
+            jobs[n_jobs].s = reservoirs_prev[pixel_index(q)].s;
+            jobs[n_jobs].prev = 1u;
+            jobs[n_jobs].q = q;
+            jobs[n_jobs].source = jobs[j].source;
+            ++n_jobs;
+        }
+    }
+
     vec3 F[MAX_JOBS];
     for (uint j = 0u; j < n_jobs; ++j) {
         F[j] = vec3(0.0);
@@ -191,7 +216,7 @@ void main() {
     float t_cp = luminance(F[0]);
     float M_partner = canonical_partner ? slot_M[jobs[0].source] : 0.0;
     PathReservoir r = reservoir_empty();
-    for (uint j = 1u; j < n_jobs; ++j) {
+    for (uint j = 1u; j < n_prev; ++j) {
         uint sl = jobs[j].source;
         PathReservoir rq = reservoirs_prev[pixel_index(slot_q[sl])];
         float t_prev = rq.target, W = rq.W;
@@ -199,6 +224,7 @@ void main() {
             t_prev = frac_r.target;
             W = W_frac;
         }
+        if (pc.shapesMoved != 0u) t_prev = luminance(F[n_prev + j - 1u]);
         float t_qc = luminance(F[j]);
         float m_q;
         if (pc.mis == TEMPORAL_MIS_BALANCE) {
