@@ -28,7 +28,9 @@ public:
             .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
         r.param("roughnessThreshold", 0.2)
             .range(0, 1)
-            .doc("hybrid shift: both reconnection endpoints need microfacet alpha above this");
+            .doc(
+                "hybrid shift: both reconnection endpoints need linear roughness sqrt(alpha) "
+                "above this");
         r.param("distanceThreshold", 0.1)
             .min(0)
             .doc("hybrid shift: minimum reconnection segment length (near-field distance)");

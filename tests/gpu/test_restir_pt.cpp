@@ -159,6 +159,14 @@ TEST(ReSTIRPT, UnbiasedEveryShiftAndAblation) {
         auto c = compareWithReference(scene, "restir_pt.json", {{"initial.shift", shift}}, 2.0f);
         EXPECT_LT(c.z, 3.0) << shift << ": restir " << c.restir << " vs " << c.reference;
     }
+    // Hybrid with a high roughness threshold: the spheres with alpha <= 0.2 are then replayed
+    // through before reconnecting (k >= 3), which the default threshold (alpha > 0.04) rarely
+    // needs on this scene.
+    {
+        auto c = compareWithReference(scene, "restir_pt.json",
+                                      {{"initial.roughnessThreshold", 0.5}}, 2.0f);
+        EXPECT_LT(c.z, 3.0) << "threshold 0.5: restir " << c.restir << " vs " << c.reference;
+    }
     for (const char* mis : {"pairwise", "balance"}) {
         auto c = compareWithReference(scene, "restir_pt.json", {{"spatial.mis", mis}}, 2.0f);
         EXPECT_LT(c.z, 3.0) << "spatial " << mis << ": restir " << c.restir << " vs "
@@ -234,15 +242,18 @@ TEST(AreaReSTIR, PrimaryHitReconnectionJacobian) {
     s.camera.type = scene::CameraType::ThinLens;
     s.camera.apertureRadius = 0.4f;
     s.camera.focusDistance = 3.0f;  // everything strongly defocused
-    json g = {{"name", "lens_jacobian"},
-              {"passes",
-               {{{"name", "k"},
-                 {"type", "ComputePass"},
-                 {"params",
-                  {{"shader", std::string(LOOM_TEST_DATA) + "/restir_lens_jacobian.comp"},
-                   {"outputs", {{"result", {{"glsl", "resultImage"}, {"format", "rgba32f"}}}}}}}}}},
-              {"edges", json::array()},
-              {"outputs", {"k.result"}}};
+    json g = {
+        {"name", "lens_jacobian"},
+        {"passes",
+         {{{"name", "k"},
+           {"type", "ComputePass"},
+           {"params",
+            {{"shader", std::string(LOOM_TEST_DATA) + "/restir_lens_jacobian.comp"},
+             {"outputs", {{"result", {{"glsl", "resultImage"}, {"format", "rgba32f"}}}}},
+             {"persistent",
+              {{"counters", {{"glsl", "RestirCounters"}, {"kind", "buffer"}, {"bytes", 20}}}}}}}}}},
+        {"edges", json::array()},
+        {"outputs", {"k.result"}}};
     Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), "<test>"), 48, 48, 1);
     r.setScene(s);
     r.frame();
@@ -362,7 +373,9 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
 // The counters the reuse passes expose to Lua and the inspector are consistent: attempts by
 // kind, successes within attempts, and at least one ray per successful shift.
 TEST(ReSTIRPT, ShiftCountersAreConsistent) {
-    Renderer r(test::gpuContext(), restirGraph("restir_pt.json"), 32, 32, 1);
+    // Threshold 0.5: the spheres with alpha <= 0.2 are not rough, so some paths need replay.
+    Renderer r(test::gpuContext(),
+               restirGraph("restir_pt.json", {{"initial.roughnessThreshold", 0.5}}), 32, 32, 1);
     r.loadScene(sourcePath("scenes/glossy_spheres.json"));
     for (int f = 0; f < 3; ++f) r.frame();
     for (const char* name : {"temporal", "spatial"}) {

@@ -53,11 +53,13 @@ float reconnection_jacobian_pss(float J_solid, float pdf_y_prev, float pdf_x_pre
     return den > 0.0 ? J_solid * (pdf_y_prev * pdf_y_k) / den : 0.0;
 }
 
-// Vertex classification for the reconnection criteria.
+// Vertex classification for the reconnection criteria: diffuse, or linear roughness sqrt(alpha)
+// above the threshold (the roughness Lin et al.'s Falcor code compares with 0.2, alpha > 0.04).
+// Materials with a delta lobe (smooth coatings, glass) never count, whichever lobe was sampled.
 bool restir_vertex_rough(Material m, float threshold) {
     uint flags = bsdf_flags(m);
     if ((flags & BSDF_DELTA) != 0u || (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) return false;
-    return material_type(m) == MATERIAL_DIFFUSE || material_alpha(m) > threshold;
+    return material_type(m) == MATERIAL_DIFFUSE || sqrt(material_alpha(m)) > threshold;
 }
 
 // Is (x_{k-1}, x_k) a reconnection pair under the settings' shift?

@@ -98,6 +98,11 @@ void main() {
     float t_c_to[MAX_TECHNIQUES];   // canonical sample's target in technique b (times J)
     float den[MAX_TECHNIQUES + 1u]; // balance denominators (index n: canonical)
     for (uint i = 0u; i <= n; ++i) den[i] = 0.0;
+    for (uint i = 0u; i < n; ++i) {  // neighbours with W <= 0 are skipped below
+        F_here[i] = vec3(0.0);
+        J_here[i] = 0.0;
+        t_c_to[i] = 0.0;
+    }
     uint sources = balance ? n + 1u : 1u;
     for (uint it = 0u; it < n + n * sources; ++it) {
         bool to_here = it < n;
