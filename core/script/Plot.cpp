@@ -255,13 +255,20 @@ std::vector<Item> layout(const PlotSpec& spec) {
     Axis ax = makeAxis(xs, spec.logX), ay = makeAxis(ys, spec.logY);
 
     const double W = spec.width, H = spec.height;
-    const double tickScale = 2, labelScale = 2, titleScale = 3;
+    const double tickScale = 2, labelScale = 2;
     const Color ink = Color::hex(0x222222), grid = Color::hex(0xdddddd),
                 minorGrid = Color::hex(0xf0f0f0);
     double maxTick = 0;
     for (auto& l : ay.labels) maxTick = std::max(maxTick, textWidth(l, tickScale));
-    double top = spec.title.empty() ? 20 : 20 + kGlyphHeight * titleScale + 16;
     double left = 16 + (spec.yLabel.empty() ? 0 : kGlyphHeight * labelScale + 14) + maxTick + 12;
+    // The title is centred over the plot area: the largest whole glyph scale (at most 3) that
+    // keeps it inside the image.
+    double titleScale = 3;
+    if (!spec.title.empty()) {
+        double cx = (left + W - 28) / 2, room = 2 * std::min(cx, W - cx) - 16;
+        titleScale = std::clamp(std::floor(room / textWidth(spec.title, 1.0)), 1.0, 3.0);
+    }
+    double top = spec.title.empty() ? 20 : 20 + kGlyphHeight * titleScale + 16;
     double bottom = H - (12 + kGlyphHeight * tickScale + 8 +
                          (spec.xLabel.empty() ? 0 : kGlyphHeight * labelScale + 12) + 12);
     double right = W - 28;
