@@ -347,7 +347,8 @@ int cmdPasses(const std::vector<std::string>& args) {
                 std::cout << "  " << (dir[0] == 'i' ? "in  " : "out ")
                           << port["name"].get<std::string>() << " : "
                           << port["kind"].get<std::string>()
-                          << (port.contains("format") ? " " + port["format"].get<std::string>() : "")
+                          << (port.contains("format") ? " " : "")
+                          << (port.contains("format") ? port["format"].get<std::string>() : "")
                           << (port["optional"].get<bool>() ? " (optional)" : "") << "  "
                           << port["doc"].get<std::string>() << "\n";
         for (auto& param : p["params"]) {

@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/gpu/Context.h"
 #include "core/gpu/CounterBuffer.h"
@@ -13,6 +14,16 @@ namespace loom::restir {
 constexpr uint64_t kSettingsBytes = 32;    // RestirSettings header of a reservoir buffer
 constexpr uint64_t kReservoirBytes = 112;  // PathReservoir
 constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
+
+// Area ReSTIR depth-of-field shift mappings (parameter `dofShift` of the reuse passes) as the
+// kernels' SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits (path_reuse.glsl).
+inline const std::vector<std::string>& dofShiftValues() {
+    static const std::vector<std::string> values = {"both", "copy", "reconnect"};
+    return values;
+}
+inline uint32_t dofShiftBits(const std::string& v) {
+    return v == "both" ? 3u : v == "copy" ? 1u : 2u;
+}
 
 // Shift attempt/success and ray counters (RestirCounters in path_shift.glsl), exposed as pass
 // stats.

@@ -22,7 +22,7 @@ public:
             .doc(
                 "resampling MIS: defensive pairwise (default), pairwise, or the generalized "
                 "balance heuristic over all techniques (k^2 + k shifts, copy shift only)");
-        r.paramEnum("dofShift", "both", {"both", "copy", "reconnect"})
+        r.paramEnum("dofShift", "both", restir::dofShiftValues())
             .doc(
                 "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
                 "both combined by MIS (Zhang et al. 2024, Sec. 6)");
@@ -56,7 +56,7 @@ public:
                 .set("radius", float(param<double>("radius")))
                 .set("normalThreshold", float(param<double>("normalThreshold")))
                 .set("depthThreshold", float(param<double>("depthThreshold")))
-                .set("dofShifts", dofShifts())
+                .set("dofShifts", restir::dofShiftBits(param<std::string>("dofShift")))
                 .set("mis", misMode());
             ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
             ctx.cmd().barrier();
@@ -70,10 +70,6 @@ private:
     uint32_t misMode() const {
         std::string v = param<std::string>("mis");
         return v == "defensivePairwise" ? 0u : v == "pairwise" ? 1u : 2u;
-    }
-    uint32_t dofShifts() const {
-        std::string v = param<std::string>("dofShift");
-        return v == "both" ? 3u : v == "copy" ? 1u : 2u;
     }
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
     std::shared_ptr<gpu::Buffer> mScratch;

@@ -38,6 +38,10 @@ public:
                 "Area ReSTIR only (initial.reuse = area): fractional motion vectors over the 2x2 "
                 "previous pixels, resampled by previous targets then shifted (fast) or all "
                 "shifted first (robust); copy = one previous pixel, subpixel offset copied");
+        r.paramEnum("dofShift", "both", restir::dofShiftValues())
+            .doc(
+                "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
+                "both combined by MIS (Zhang et al. 2024, Sec. 6; needs mis = balance)");
         r.param("countFailedShifts", false)
             .doc(
                 "ablation, biased: with mis=uniform, count the history even when the current "
@@ -69,7 +73,8 @@ public:
             .set("confidenceCap", float(param<double>("confidenceCap")))
             .set("normalThreshold", float(param<double>("normalThreshold")))
             .set("depthThreshold", float(param<double>("depthThreshold")))
-            .set("shapesMoved", uint32_t(ctx.scene().shapesMoved()));
+            .set("shapesMoved", uint32_t(ctx.scene().shapesMoved()))
+            .set("dofShifts", restir::dofShiftBits(param<std::string>("dofShift")));
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }

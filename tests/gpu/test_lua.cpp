@@ -755,31 +755,33 @@ TEST(LoomRun, ReSTIREqualTimeScript) {
                          " out=rt",
                      tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    for (const char* s : {"skipping no/such.json", "ReSTIR PT", "static", "moving", "relMSE",
-                          "GPU ms per pass", "spatial"})
+    for (const char* s : {"skipping no/such.json", "ReSTIR PT", "static", "still", "moving",
+                          "relMSE", "GPU ms per pass", "spatial"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
     script::CsvTable csv = script::readCsv(tmp / "rt/restir_equal_time.csv");
     EXPECT_EQ(csv.header,
               (std::vector<std::string>{"index", "scene", "camera", "config", "budget_ms", "gpu_ms",
                                         "frames", "spp", "relmse", "relmse_trim", "mape"}));
-    // Static: 2 configurations x 2 budget steps; moving: one row per configuration.
-    ASSERT_EQ(csv.rows.size(), 6u);
-    int moving = 0;
+    // Static: 2 configurations x 2 budget steps; still and moving: one row per configuration.
+    ASSERT_EQ(csv.rows.size(), 8u);
+    int moving = 0, still = 0;
     for (auto& row : csv.rows) {
         EXPECT_EQ(row[1], "cornell_box");
         EXPECT_GT(std::stod(row[8]), 0.0) << "relMSE";
         if (row[2] == "static") {
             EXPECT_GE(std::stod(row[5]), std::stod(row[4])) << "budget met";
         } else {
-            ++moving;
+            ++(row[2] == "still" ? still : moving);
             EXPECT_EQ(row[6], "3") << "frames of the camera swing";
             EXPECT_GE(std::stoi(row[7]), 1) << "spp";
         }
     }
     EXPECT_EQ(moving, 2);
-    for (const char* f : {"rt/summary.csv", "rt/cornell_box_static.png",
-                          "rt/cornell_box_static.svg", "rt/cornell_box_path.json",
-                          "rt/cornell_box_ReSTIR_PT_static.png", "rt/cornell_box_PT_moving.png"})
+    EXPECT_EQ(still, 2);
+    for (const char* f :
+         {"rt/summary.csv", "rt/cornell_box_static.png", "rt/cornell_box_PT_still.png",
+          "rt/cornell_box_static.svg", "rt/cornell_box_path.json",
+          "rt/cornell_box_ReSTIR_PT_static.png", "rt/cornell_box_PT_moving.png"})
         EXPECT_TRUE(fs::exists(tmp / f)) << f;
 }
 

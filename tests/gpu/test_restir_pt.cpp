@@ -233,6 +233,12 @@ TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
         auto c = compareWithReference(s, "area_restir.json", {{"spatial.dofShift", shift}}, 3.0f);
         EXPECT_LT(c.z, 3.0) << shift << ": " << c.restir << " vs " << c.reference;
     }
+    // Temporal reuse by primary-hit reconnection alone (the default combines it with copy).
+    {
+        auto c =
+            compareWithReference(s, "area_restir.json", {{"temporal.dofShift", "reconnect"}}, 3.0f);
+        EXPECT_LT(c.z, 3.0) << "temporal reconnect: " << c.restir << " vs " << c.reference;
+    }
 }
 
 // The primary-hit reconnection Jacobian (lens sample space) against central finite differences
@@ -291,14 +297,16 @@ namespace {
 
 // GBuffer -> ReSTIRPTInitial -> tests/data/restir_shift_check.comp.
 std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
-                                             const std::string& reuse = "path") {
+                                             const std::string& reuse = "path",
+                                             double roughnessThreshold = 0.2) {
     json g = {
         {"name", "restir_shift_check"},
         {"passes",
          {{{"name", "gbuffer"}, {"type", "GBuffer"}},
           {{"name", "initial"},
            {"type", "ReSTIRPTInitial"},
-           {"params", {{"shift", shift}, {"reuse", reuse}}}},
+           {"params",
+            {{"shift", shift}, {"reuse", reuse}, {"roughnessThreshold", roughnessThreshold}}}},
           {{"name", "check"},
            {"type", "ComputePass"},
            {"params",
@@ -325,11 +333,14 @@ std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
 // kind (reconnection at a surface, at a light, replay only); shifts to a neighbour mostly succeed.
 TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
     for (const char* scene : {"scenes/cornell_box.json", "scenes/glossy_spheres.json"}) {
-        for (std::string shift : {"hybrid", "reconnection", "replay", "area"}) {
+        // hybrid-0.5: roughness threshold 0.5, so that the glossy spheres are replayed through
+        // before the reconnection vertex (k >= 3).
+        for (std::string shift : {"hybrid", "hybrid-0.5", "reconnection", "replay", "area"}) {
             bool area = shift == "area";
-            if (area) shift = "hybrid";
-            Renderer r(test::gpuContext(), shiftCheckGraph(shift, area ? "area" : "path"), 48, 48,
-                       3);
+            double threshold = shift == "hybrid-0.5" ? 0.5 : 0.2;
+            if (area || shift == "hybrid-0.5") shift = "hybrid";
+            Renderer r(test::gpuContext(),
+                       shiftCheckGraph(shift, area ? "area" : "path", threshold), 48, 48, 3);
             r.loadScene(sourcePath(scene));
             int samples = 0, exact = 0, wrong = 0, reconnected = 0, neighbourOk = 0;
             for (int f = 0; f < 4; ++f) {
@@ -353,7 +364,8 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
                     if (p[2] > 0) ++neighbourOk;
                 }
             }
-            SCOPED_TRACE(std::string(scene) + " " + shift + (area ? " area" : ""));
+            SCOPED_TRACE(std::string(scene) + " " + shift + (area ? " area" : "") + " threshold " +
+                         std::to_string(threshold));
             ASSERT_GT(samples, 1000);
             // Float round-off only: segments of near-zero length or grazing angles (the
             // reconnection shift has no distance threshold) may differ by a little.

@@ -591,7 +591,7 @@ TEST(SceneLoaders, PlyAsciiAndBinaryAgree) {
     }
     for (auto& f : faces) {
         ascii += std::to_string(f.size());
-        for (int i : f) ascii += " " + std::to_string(i);
+        for (int i : f) ascii.append(" ").append(std::to_string(i));
         ascii += "\n";
     }
     ascii += "0 1\n";

@@ -40,6 +40,10 @@ PrimaryHit restir_domain_primary(RestirSettings cfg, PathSample s, PrimaryHit pi
     return ph;
 }
 
+// Area ReSTIR shift mappings of the primary vertex under a thin lens (bit masks, dofShift).
+const uint SHIFT_COPY = 1u;               // film and lens sample replayed (lens-vertex copy)
+const uint SHIFT_PRIMARY_RECONNECT = 2u;  // primary hit kept, lens point solved for
+
 // Thin-lens point on the focal plane seen through film position (pixel + offset).
 vec3 camera_focal_point(CameraFrame cam, vec2 film_uv) {
     vec3 d = vec3((1.0 - 2.0 * film_uv.x) * cam.tan_half_fov.x,
@@ -58,13 +62,15 @@ float projection_area_ratio(vec3 P, vec3 a, vec3 n_a, vec3 b, vec3 n_b) {
 }
 
 // Primary-hit reconnection for depth of field (Zhang et al. 2024, Sec. 6): keep the sample's
-// primary hit x1, copy its film offset to dst_pixel, and pick the lens point whose ray through
-// that film position's focal point reaches x1. src: the sample's primary hit in its own domain
-// (camera = its lens point). J = |d lens_y / d lens_x| (lens area, = primary sample space: the
-// concentric mapping preserves area): lens_x -> x1 -> lens_y are two central projections
-// through the focal points P_x and P_y.
-bool restir_primary_reconnect(PathSample s, PrimaryHit src, ivec2 src_pixel, CameraPose src_pose,
-                              ivec2 dst_pixel, CameraPose dst_pose, uvec2 frame_size,
+// primary hit x1 and pick the lens point whose ray through the focal point of the destination
+// film position reaches x1. src: the sample's primary hit in its own domain (camera = its lens
+// point); src_film / dst_film: film positions in pixels (pixel + subpixel offset; spatial reuse
+// copies the offset, temporal reuse translates it by the motion vector); only the lens sample
+// of s_dst is set. J = |d lens_y / d lens_x| (lens area, = primary sample space: the concentric
+// mapping preserves area): lens_x -> x1 -> lens_y are two central projections through the
+// focal points P_x and P_y.
+bool restir_primary_reconnect(PathSample s, PrimaryHit src, vec2 src_film, CameraPose src_pose,
+                              vec2 dst_film, CameraPose dst_pose, uvec2 frame_size,
                               out PathSample s_dst, out PrimaryHit dst, out float J) {
     s_dst = s;
     dst = src;
@@ -74,8 +80,8 @@ bool restir_primary_reconnect(PathSample s, PrimaryHit src, ivec2 src_pixel, Cam
     CameraFrame cy = camera_frame(dst_pose, dst_pose, 0.0);
     if (cy.aperture <= 0.0 || cx.aperture <= 0.0) return false;
     SurfacePoint x1 = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
-    vec3 Px = camera_focal_point(cx, (vec2(src_pixel) + s.film_lens.xy) / vec2(frame_size));
-    vec3 Py = camera_focal_point(cy, (vec2(dst_pixel) + s.film_lens.xy) / vec2(frame_size));
+    vec3 Px = camera_focal_point(cx, src_film / vec2(frame_size));
+    vec3 Py = camera_focal_point(cy, dst_film / vec2(frame_size));
     // Line Py -> x1 meets the lens plane (camera z = 0).
     vec3 P = Py - cy.origin, X = x1.p - cy.origin;
     vec3 Pc = vec3(dot(P, cy.right_axis), dot(P, cy.up_axis), dot(P, cy.forward));

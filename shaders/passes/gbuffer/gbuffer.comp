@@ -58,11 +58,15 @@ void main() {
     imageStore(albedoImage, ip, vec4(sh.mat.diffuse.rgb, 1.0));
     imageStore(roughnessImage, ip, vec4(material_alpha(sh.mat)));
     // Motion vector: where the hit point was on the previous frame's film (camera motion and
-    // rigid shape motion).
-    vec2 uv_prev;
+    // rigid shape motion). Both ends are pinhole projections of the point: under a thin lens the
+    // sample's film position is off the point's projection by its defocus, and a motion vector
+    // must not depend on the lens sample (Area ReSTIR picks its temporal partner with it, and a
+    // technique choice that depends on the canonical sample biases the MIS). Pinhole: the same.
+    vec2 uv_prev, uv_now;
     CameraFrame prev = camera_frame(scene_info.camera_prev, scene_info.camera_prev, 0.0);
     vec2 mv = vec2(0.0);
-    if (camera_project(prev, previous_position(sh.sp.shape, sh.sp.p), uv_prev))
-        mv = uv_prev * vec2(pc.frameSize) - (vec2(pixel) + sub);
+    if (camera_project(prev, previous_position(sh.sp.shape, sh.sp.p), uv_prev) &&
+        camera_project(cam, sh.sp.p, uv_now))
+        mv = (uv_prev - uv_now) * vec2(pc.frameSize);
     imageStore(motionImage, ip, vec4(mv, 0.0, 0.0));
 }

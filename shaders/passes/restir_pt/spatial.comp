@@ -35,8 +35,6 @@ const uint SPATIAL_MIS_DEFENSIVE_PAIRWISE = 0u;
 const uint SPATIAL_MIS_PAIRWISE = 1u;
 const uint SPATIAL_MIS_BALANCE = 2u;
 
-const uint SHIFT_COPY = 1u;               // film and lens sample replayed (lens-vertex copy)
-const uint SHIFT_PRIMARY_RECONNECT = 2u;  // primary hit kept, lens point solved for
 
 // A random neighbour in the disk of `radius`; false when it is this pixel, off screen, or
 // geometrically dissimilar (then it is not a technique at all).
@@ -124,7 +122,8 @@ void main() {
         PathSample s_dst = s_src;
         PrimaryHit dst = base;
         float J = 1.0;
-        bool ok = copy || restir_primary_reconnect(s_src, base, q_src, pose, q_dst, pose,
+        bool ok = copy || restir_primary_reconnect(s_src, base, vec2(q_src) + s_src.film_lens.xy, pose,
+                                                    vec2(q_dst) + s_src.film_lens.xy, pose,
                                                     pc.frameSize, s_dst, dst, J);
         vec3 F = ok ? restir_shift(cfg, s_dst, dst) : vec3(0.0);
         if (to_here) {

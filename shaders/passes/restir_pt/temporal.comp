@@ -37,6 +37,7 @@ layout(push_constant) uniform Params {
     float normalThreshold;
     float depthThreshold;
     uint shapesMoved;  // the scene's shapes moved since the previous frame
+    uint dofShifts;    // Area ReSTIR under a thin lens: SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits
 } pc;
 
 // Area ReSTIR temporal reprojection (Zhang et al. 2024, Sec. 5). Samples carry film positions, so
@@ -62,25 +63,52 @@ bool prev_pixel_usable(ivec2 q, PrimaryHit hc) {
 uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 
 // Shift jobs, all run through one restir_shift call site (lavapipe compiles every inlined copy
-// of the shift and its BVH traversals separately: code size is speed). Job 0: the canonical
-// sample to its previous-frame partner; jobs 1..: previous samples to this pixel; when shapes
-// moved, then each of those previous samples at its own previous pixel.
+// of the shift and its BVH traversals separately: code size is speed). A job takes sample s from
+// its own domain (pixel src_q of this or the previous frame) to film offset dst_off of pixel
+// dst_q, by lens-vertex copy (film offset and lens sample replayed) or, for Area ReSTIR under a
+// thin lens, by primary-hit reconnection (x1 kept, lens point solved; Zhang et al. 2024 Sec. 6).
+// Jobs: the canonical sample to its previous-frame partner (one per shift), the previous
+// samples to this pixel (one per shift), and when shapes moved each previous sample at its own
+// previous pixel.
 //
 // Moving shapes: only this frame's geometry is on the GPU, so the canonical sample's target in
-// the previous domain (job 0) is evaluated in it. The MIS weights stay a partition of unity
-// only if the previous samples' own targets come from the same function, so they are evaluated
-// again in this geometry instead of using the stored ones (exact for a static scene, where both
-// agree and the extra shifts are skipped). What remains approximate is the support: a path that
+// the previous domain is evaluated in it. The MIS weights stay a partition of unity only if the
+// previous samples' own targets come from the same function, so they are evaluated again in
+// this geometry instead of using the stored ones (exact for a static scene, where both agree
+// and the extra shifts are skipped). What remains approximate is the support: a path that
 // exists now but was blocked in the previous frame's geometry still lowers the canonical
 // weight.
-const uint MAX_PREV_JOBS = 4u;
-const uint MAX_JOBS = 1u + 2u * MAX_PREV_JOBS;
+const uint MAX_PREV_SLOTS = 4u;
+const uint MAX_JOBS = 2u + 3u * MAX_PREV_SLOTS;
 struct ShiftJob {
-    PathSample s;
-    uint prev;        // 1: destination is a previous-frame pixel
-    ivec2 q;          // destination pixel
-    uint source;      // previous pixel slot of the sample (jobs 1..)
+    PathSample s;     // in its own domain
+    ivec2 src_q;
+    uint src_prev;    // 1: the source domain is a previous-frame pixel
+    ivec2 dst_q;
+    uint dst_prev;
+    vec2 dst_off;     // film offset in the destination pixel
+    uint shift;       // SHIFT_COPY or SHIFT_PRIMARY_RECONNECT
+    uint source;      // previous pixel slot of the sample
 };
+
+ShiftJob shift_job(PathSample s, ivec2 src_q, uint src_prev, ivec2 dst_q, uint dst_prev,
+                   vec2 dst_off, uint shift, uint source) {
+    ShiftJob j;
+    j.s = s;
+    j.src_q = src_q;
+    j.src_prev = src_prev;
+    j.dst_q = dst_q;
+    j.dst_prev = dst_prev;
+    j.dst_off = dst_off;
+    j.shift = shift;
+    j.source = source;
+    return j;
+}
+
+CameraPose pose_of(uint prev) { return prev != 0u ? scene_info.camera_prev : scene_info.camera_open; }
+PrimaryHit primary_of(uint prev, ivec2 q) {
+    return prev != 0u ? primary_prev[pixel_index(q)] : primary_in[pixel_index(q)];
+}
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -106,17 +134,28 @@ void main() {
     float Mc = rc.M, cap = pc.confidenceCap * rc.M;
     bool fractional = cfg.area != 0u && pc.areaVariant != AREA_COPY;
     vec2 t = imageLoad(motionImage, ivec2(pixel)).xy;
+    // Shift mappings: each is a technique per previous pixel with 1 / n_shifts of its confidence,
+    // combined with the canonical technique by pairwise MIS (with one shift: the 2-technique
+    // generalized balance heuristic). Primary-hit reconnection needs the balance heuristic.
+    uint shifts = SHIFT_COPY;
+    if (cfg.area != 0u && pc.mis == TEMPORAL_MIS_BALANCE && scene_info.camera_open.up.w > 0.0 &&
+        scene_info.camera_prev.up.w > 0.0)
+        shifts = pc.dofShifts;
+    float n_shifts = float(bitCount(shifts));
 
     // Previous-frame techniques: one pixel (ReSTIR PT, Area copy) or the 2x2 footprint block.
-    ivec2 slot_q[4];
-    float slot_M[4];
+    ivec2 slot_q[MAX_PREV_SLOTS];
+    float slot_M[MAX_PREV_SLOTS];
     uint slots = 0u;
-    ShiftJob jobs[MAX_JOBS];
-    uint n_jobs = 1u;
-    jobs[0].prev = 1u;
-    jobs[0].source = 0u;
-    jobs[0].s = rc.s;
+    // Samples shifted here: (own sample, film offset here, slot).
+    PathSample in_s[MAX_PREV_SLOTS];
+    vec2 in_off[MAX_PREV_SLOTS];
+    uint in_slot[MAX_PREV_SLOTS];
+    uint n_in = 0u;
     bool canonical_partner = false;
+    ivec2 partner_q = ivec2(0);
+    uint partner_slot = 0u;
+    vec2 partner_off = vec2(0.0);  // the canonical sample's film offset in its partner pixel
     float M_prev = 0.0;
     PathReservoir frac_r = reservoir_empty();  // AREA_FAST: the fractional reservoir
     float W_frac = 0.0;
@@ -128,14 +167,14 @@ void main() {
             slot_M[0] = min(rp.M, cap);
             slots = 1u;
             M_prev = slot_M[0];
-            jobs[0].q = q;
             canonical_partner = true;
+            partner_q = q;
+            partner_off = rc.s.film_lens.xy;
             if (rp.W > 0.0) {
-                jobs[1].s = rp.s;
-                jobs[1].prev = 0u;
-                jobs[1].q = ivec2(pixel);
-                jobs[1].source = 0u;
-                n_jobs = 2u;
+                in_s[0] = rp.s;
+                in_off[0] = rp.s.film_lens.xy;
+                in_slot[0] = 0u;
+                n_in = 1u;
             }
         }
     } else {
@@ -157,89 +196,129 @@ void main() {
             M_prev += cover.x * cover.y * slot_M[sl];
             if (all(equal(q, qc))) {
                 canonical_partner = true;
-                jobs[0].q = q;
-                jobs[0].source = sl;
-                jobs[0].s = with_film_offset(rc.s, Xc - vec2(qc));
+                partner_q = q;
+                partner_slot = sl;
+                partner_off = Xc - vec2(qc);
             }
             // Its sample lands in this pixel only from its part of the footprint.
             vec2 X = vec2(q) + rq.s.film_lens.xy - t;
             if (rq.W <= 0.0 || any(lessThan(X, vec2(pixel))) || any(greaterThanEqual(X, vec2(pixel) + 1.0)))
                 continue;
-            PathSample sq = with_film_offset(rq.s, X - vec2(pixel));
             if (pc.areaVariant == AREA_FAST) {
                 // Resample by the previous targets (no shift yet); parts are disjoint: weight 1.
+                PathSample sq = rq.s;
+                sq.film_lens.xy = X - vec2(pixel);
                 if (reservoir_add(frac_r, sq, vec3(0.0), rq.target, rq.target * rq.W, rng_next(rng)))
                     frac_r.pad = sl;
                 continue;
             }
-            jobs[n_jobs].s = sq;
-            jobs[n_jobs].prev = 0u;
-            jobs[n_jobs].q = ivec2(pixel);
-            jobs[n_jobs].source = sl;
-            ++n_jobs;
+            in_s[n_in] = rq.s;
+            in_off[n_in] = X - vec2(pixel);
+            in_slot[n_in] = sl;
+            ++n_in;
         }
         if (pc.areaVariant == AREA_FAST && frac_r.w_sum > 0.0) {
             W_frac = frac_r.w_sum / frac_r.target;
-            jobs[1].s = frac_r.s;
-            jobs[1].prev = 0u;
-            jobs[1].q = ivec2(pixel);
-            jobs[1].source = frac_r.pad;
-            n_jobs = 2u;
+            in_s[0] = reservoirs_prev[pixel_index(slot_q[frac_r.pad])].s;
+            in_off[0] = frac_r.s.film_lens.xy;
+            in_slot[0] = frac_r.pad;
+            n_in = 1u;
         }
     }
 
-    // Moving shapes: re-evaluate each previous sample's target in its own domain (job n_prev + j - 1
-    // for job j).
-    uint n_prev = n_jobs;
-    if (pc.shapesMoved != 0u) {
-        for (uint j = 1u; j < n_prev; ++j) {
-            ivec2 q = slot_q[jobs[j].source];
-            jobs[n_jobs].s = reservoirs_prev[pixel_index(q)].s;
-            jobs[n_jobs].prev = 1u;
-            jobs[n_jobs].q = q;
-            jobs[n_jobs].source = jobs[j].source;
-            ++n_jobs;
+    // Jobs: [0, n_c) canonical -> partner, one per shift; [n_c, n_c + n_in * n_shifts) previous
+    // samples -> here; then the re-evaluations of moving shapes.
+    ShiftJob jobs[MAX_JOBS];
+    uint n_jobs = 0u;
+    for (uint sh = SHIFT_COPY; sh <= SHIFT_PRIMARY_RECONNECT; sh <<= 1)
+        if ((shifts & sh) != 0u && canonical_partner && rc.W > 0.0)
+            jobs[n_jobs++] = shift_job(rc.s, ivec2(pixel), 0u, partner_q, 1u, partner_off, sh, partner_slot);
+    uint n_c = n_jobs;
+    for (uint i = 0u; i < n_in; ++i)
+        for (uint sh = SHIFT_COPY; sh <= SHIFT_PRIMARY_RECONNECT; sh <<= 1)
+            if ((shifts & sh) != 0u)
+                jobs[n_jobs++] = shift_job(in_s[i], slot_q[in_slot[i]], 1u, ivec2(pixel), 0u,
+                                           in_off[i], sh, in_slot[i]);
+    uint n_here = n_jobs;
+    if (pc.shapesMoved != 0u)
+        for (uint i = 0u; i < n_in; ++i) {
+            ivec2 q = slot_q[in_slot[i]];
+            jobs[n_jobs++] = shift_job(in_s[i], q, 1u, q, 1u, in_s[i].film_lens.xy, SHIFT_COPY, in_slot[i]);
         }
-    }
 
     vec3 F[MAX_JOBS];
+    float J[MAX_JOBS];
+    PathSample s_out[MAX_JOBS];
     for (uint j = 0u; j < n_jobs; ++j) {
-        F[j] = vec3(0.0);
-        if (j == 0u && (!canonical_partner || rc.W <= 0.0)) continue;
         ShiftJob job = jobs[j];
-        PrimaryHit h = job.prev != 0u ? primary_prev[pixel_index(job.q)] : hc;
-        PrimaryHit dst = restir_domain_primary(cfg, job.s, h, job.q,
-                                               job.prev != 0u ? scene_info.camera_prev : scene_info.camera_open);
-        F[j] = restir_shift(cfg, job.s, dst);
+        PathSample s_dst = job.s;
+        s_dst.film_lens.xy = job.dst_off;
+        CameraPose dst_pose = pose_of(job.dst_prev);
+        PrimaryHit dst;
+        J[j] = 1.0;
+        bool ok = true;
+        if (job.shift == SHIFT_COPY) {
+            // Copy: replay the film/lens sample in the destination (Jacobian 1).
+            dst = restir_domain_primary(cfg, s_dst, primary_of(job.dst_prev, job.dst_q), job.dst_q,
+                                        dst_pose);
+        } else {
+            // Reconnection: the source domain's primary hit, kept, with the lens point solved for
+            // in the destination.
+            CameraPose src_pose = pose_of(job.src_prev);
+            PrimaryHit src = restir_domain_primary(cfg, job.s, primary_of(job.src_prev, job.src_q),
+                                                   job.src_q, src_pose);
+            PathSample s_rec;
+            ok = restir_primary_reconnect(job.s, src, vec2(job.src_q) + job.s.film_lens.xy, src_pose,
+                                          vec2(job.dst_q) + job.dst_off, dst_pose, pc.frameSize,
+                                          s_rec, dst, J[j]);
+            s_dst.film_lens.zw = s_rec.film_lens.zw;
+        }
+        F[j] = ok ? restir_shift(cfg, s_dst, dst) : vec3(0.0);
+        s_out[j] = s_dst;
     }
 
-    float t_cp = luminance(F[0]);
-    float M_partner = canonical_partner ? slot_M[jobs[0].source] : 0.0;
+    // Pairwise MIS over the shifts (Lin et al. 2022 Sec. 7.2, non-defensive; with one shift the
+    // 2-technique balance heuristic): technique (q, shift) with confidence M_q / n_shifts,
+    //   previous sample x = T(x_q):  m = b(x) / n_shifts,
+    //   canonical y_c:               m_c = sum over shifts of (1 - b(y_c)) / n_shifts,
+    // b = balance(M_q / n_shifts * p_hat_q pulled back here, M_c * p_hat_c), the pull-back of a
+    // target carrying the shift's Jacobian (Lin et al. Eq. 9).
     PathReservoir r = reservoir_empty();
-    for (uint j = 1u; j < n_prev; ++j) {
+    for (uint j = n_c; j < n_here; ++j) {
         uint sl = jobs[j].source;
+        uint i = (j - n_c) / uint(n_shifts);
         PathReservoir rq = reservoirs_prev[pixel_index(slot_q[sl])];
         float t_prev = rq.target, W = rq.W;
         if (fractional && pc.areaVariant == AREA_FAST) {
             t_prev = frac_r.target;
             W = W_frac;
         }
-        if (pc.shapesMoved != 0u) t_prev = luminance(F[n_prev + j - 1u]);
+        if (pc.shapesMoved != 0u) t_prev = luminance(F[n_here + i]);
         float t_qc = luminance(F[j]);
         float m_q;
         if (pc.mis == TEMPORAL_MIS_BALANCE) {
-            m_q = mis_balance2(slot_M[sl], t_prev, Mc, t_qc);
+            float t_own = J[j] > 0.0 ? t_prev / J[j] : 0.0;
+            m_q = mis_balance2(slot_M[sl] / n_shifts, t_own, Mc, t_qc) / n_shifts;
         } else {
             m_q = slot_M[sl] / (slot_M[sl] + Mc);
         }
-        reservoir_add(r, jobs[j].s, F[j], t_qc, m_q * t_qc * W, rng_next(rng));
+        reservoir_add(r, s_out[j], F[j], t_qc, m_q * t_qc * W * J[j], rng_next(rng));
     }
+    float M_partner = canonical_partner ? slot_M[partner_slot] : 0.0;
     float m_c;
     if (pc.mis == TEMPORAL_MIS_BALANCE) {
-        m_c = mis_balance2(Mc, rc.target, M_partner, t_cp);
+        m_c = 0.0;
+        uint k = 0u;
+        for (uint sh = SHIFT_COPY; sh <= SHIFT_PRIMARY_RECONNECT; sh <<= 1) {
+            if ((shifts & sh) == 0u) continue;
+            float t_cp = k < n_c ? luminance(F[k]) * J[k] : 0.0;
+            m_c += mis_balance2(Mc, rc.target, M_partner / n_shifts, t_cp) / n_shifts;
+            ++k;
+        }
     } else {
         // 1/|Z(x)| with confidences: only techniques that can produce x count. With
         // countFailedShifts the previous frame is counted even when Y_c cannot shift there.
+        float t_cp = n_c > 0u ? luminance(F[0]) : 0.0;
         bool counts = t_cp > 0.0 || (pc.countFailedShifts != 0u && canonical_partner);
         m_c = Mc / (Mc + (counts ? M_partner : 0.0));
     }
