@@ -49,11 +49,6 @@ const uint AREA_FAST = 0u;    // RIS over the 2x2 block by previous targets, shi
 const uint AREA_ROBUST = 1u;  // shift all four first, resample by current targets
 const uint AREA_COPY = 2u;    // one previous pixel, subpixel offset copied (no fraction)
 
-PathSample with_film_offset(PathSample s, vec2 offset) {
-    s.film_lens.xy = offset;
-    return s;
-}
-
 bool prev_pixel_usable(ivec2 q, PrimaryHit hc) {
     if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(pc.frameSize)))) return false;
     return restir_similar(hc, primary_prev[uint(q.y) * pc.frameSize.x + uint(q.x)],
