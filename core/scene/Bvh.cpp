@@ -378,26 +378,35 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
     return out;
 }
 
-void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build) {
+void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build, const BvhBuild* previous) {
     // Nodes as texels of a 2D image, rows of kBvhNodeImageWidth; the last row zero-padded.
     constexpr uint32_t kTexelsPerNode = sizeof(BvhNode) / 16;
-    const size_t texels = std::max<size_t>(build.nodes.size(), 1) * kTexelsPerNode;
+    std::vector<BvhNode> allNodes = build.nodes;
+    std::vector<BvhTriangle> allTriangles = build.triangles;
+    previousNodeBase = previousTriangleBase = 0;
+    if (previous) {
+        previousNodeBase = uint32_t(allNodes.size());
+        previousTriangleBase = uint32_t(allTriangles.size());
+        allNodes.insert(allNodes.end(), previous->nodes.begin(), previous->nodes.end());
+        allTriangles.insert(allTriangles.end(), previous->triangles.begin(),
+                            previous->triangles.end());
+    }
+    const size_t texels = std::max<size_t>(allNodes.size(), 1) * kTexelsPerNode;
     const size_t rows = (texels + kBvhNodeImageWidth - 1) / kBvhNodeImageWidth;
     if (rows > 16384)
         throw UserError(fmt::format("BVH of {} nodes exceeds the node image ({} rows of {})",
-                                    build.nodes.size(), 16384, kBvhNodeImageWidth));
-    std::vector<BvhNode> padded(rows * kBvhNodeImageWidth / kTexelsPerNode + 1);
-    std::copy(build.nodes.begin(), build.nodes.end(), padded.begin());
+                                    allNodes.size(), 16384, kBvhNodeImageWidth));
+    allNodes.resize(rows * kBvhNodeImageWidth / kTexelsPerNode + 1);
     nodes = gpu.createImage(kBvhNodeImageWidth, uint32_t(rows), gpu::Format::RGBA32UI, "bvh_nodes");
-    gpu.uploadImage(*nodes, padded.data());
+    gpu.uploadImage(*nodes, allNodes.data());
     // Every binding must be valid: empty arrays still get a small buffer.
     auto makeBuffer = [&](const void* data, size_t bytes, const char* name) {
         auto buffer = gpu.createBuffer(std::max<size_t>(bytes, 64), name);
         if (bytes) gpu.uploadBuffer(*buffer, data, bytes);
         return buffer;
     };
-    triangles = makeBuffer(build.triangles.data(), build.triangles.size() * sizeof(BvhTriangle),
-                           "bvh_tris");
+    triangles =
+        makeBuffer(allTriangles.data(), allTriangles.size() * sizeof(BvhTriangle), "bvh_tris");
     adjacency = makeBuffer(build.adjacency.data(), build.adjacency.size() * sizeof(glm::ivec4),
                            "bvh_adjacency");
     nodeCount = uint32_t(build.nodes.size());

@@ -107,7 +107,12 @@ struct BvhGpu {
     std::shared_ptr<gpu::Image> nodes;
     std::shared_ptr<gpu::Buffer> triangles, adjacency;
     uint32_t nodeCount = 0, triangleCount = 0;
-    void upload(gpu::Context& gpu, const BvhBuild& build);
+    // With `previous`, a second tree (same input triangles, e.g. the previous frame's positions
+    // of moving shapes) follows the first in the node image and triangle buffer, at node
+    // previousNodeBase and triangle record previousTriangleBase (bvh.glsl's bvh_node_base and
+    // bvh_tri_base select it); without, both bases are 0.
+    uint32_t previousNodeBase = 0, previousTriangleBase = 0;
+    void upload(gpu::Context& gpu, const BvhBuild& build, const BvhBuild* previous = nullptr);
     void bind(gpu::Bindings& bindings) const;
 };
 

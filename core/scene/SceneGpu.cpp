@@ -42,13 +42,25 @@ struct SceneInfoGpu {
     CameraPoseGpu open, close, prev;
     glm::uvec4 counts;
     glm::vec4 boundsCenter;
+    // Where the previous frame's geometry is: vertex base, BVH node base, BVH triangle base
+    // (all 0 when it is this frame's: static scenes, or nothing moved).
+    glm::uvec4 previousGeometry{0u};
 };
 static_assert(sizeof(VertexGpu) == 32 && sizeof(ShapeGpu) == 32 && sizeof(TextureGpu) == 64 &&
-              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 3 * 64 + 32);
+              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 3 * 64 + 48);
 
-enum : uint32_t { kLightTriangle, kLightPoint, kLightSpot, kLightDirectional, kLightEnv, kLightConstant };
+enum : uint32_t {
+    kLightTriangle,
+    kLightPoint,
+    kLightSpot,
+    kLightDirectional,
+    kLightEnv,
+    kLightConstant
+};
 
-float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+float luminance(glm::vec3 c) {
+    return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+}
 
 template <class T>
 std::shared_ptr<gpu::Buffer> upload(gpu::Context& gpu, const std::vector<T>& data,
@@ -97,8 +109,8 @@ struct MovingShape {
 };
 
 struct SceneGpu::Impl {
-    std::shared_ptr<gpu::Buffer> vertices, triangles, shapes, materials, textures, texels,
-        lights, lightCdf, info, envDistribution;
+    std::shared_ptr<gpu::Buffer> vertices, triangles, shapes, materials, textures, texels, lights,
+        lightCdf, info, envDistribution;
     BvhGpu bvh;
     SceneInfoGpu infoData{};
     std::vector<EnvMapDistribution> envs;
@@ -106,8 +118,11 @@ struct SceneGpu::Impl {
     std::shared_ptr<gpu::Buffer> shapeMotion;
     std::vector<glm::vec4> shapeMotionRows;
     // Dynamic scenes only (empty when nothing moves): CPU copies for re-transforming moving
-    // shapes and rebuilding the BVH.
+    // shapes and rebuilding the BVH. Their vertex buffer holds this frame's vertices followed
+    // by the previous frame's, and the node image both BVHs (BvhGpu::upload), so that temporal
+    // reuse can evaluate paths in the previous frame's geometry (scene_select_frame).
     std::vector<MovingShape> moving;
+    BvhBuild lastBuild;
     std::vector<VertexGpu> cpuVertices;
     std::vector<glm::vec3> cpuPositions;
     std::vector<glm::uvec3> cpuIndices;
@@ -133,8 +148,7 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     for (size_t si = 0; si < s.shapes.size(); ++si) {
         const Shape& shape = s.shapes[si];
         if (shape.mesh < 0 || size_t(shape.mesh) >= s.meshes.size())
-            throw UserError("scene '" + s.sourceFile + "': shape '" + shape.name +
-                            "' has no mesh");
+            throw UserError("scene '" + s.sourceFile + "': shape '" + shape.name + "' has no mesh");
         const Mesh& mesh = s.meshes[shape.mesh];
         ShapeGpu sg{};
         sg.material = shape.material < 0 ? 0u : uint32_t(shape.material);
@@ -245,7 +259,8 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
                 lg.type = l.type == LightType::Point ? kLightPoint : kLightSpot;
                 lg.p0 = glm::vec4(l.position, std::cos(glm::radians(l.beamWidth)));
                 lg.p1 = glm::vec4(l.intensity, 0.0f);
-                lg.p2 = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.cutoffAngle)));
+                lg.p2 =
+                    glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.cutoffAngle)));
                 p = 4.0f * float(M_PI) * luminance(l.intensity);
                 break;
             }
@@ -296,7 +311,13 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     if (!cdf.empty()) cdf.back() = 1.0f;  // guard the last bin against round-off
 
     auto& g = *mImpl;
-    g.vertices = upload(gpu, vertices, "SceneVertices");
+    if (g.moving.empty()) {
+        g.vertices = upload(gpu, vertices, "SceneVertices");
+    } else {
+        std::vector<VertexGpu> both = vertices;
+        both.insert(both.end(), vertices.begin(), vertices.end());
+        g.vertices = upload(gpu, both, "SceneVertices");
+    }
     g.triangles = upload(gpu, triangles, "SceneTriangles");
     g.shapes = upload(gpu, shapes, "SceneShapes");
     g.materials = upload(gpu, materials, "SceneMaterials");
@@ -311,6 +332,7 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
 
     BvhBuild build = buildBvh(positions, indices, masks);
     g.bvh.upload(gpu, build);
+    if (!g.moving.empty()) g.lastBuild = build;
 
     g.shapeMotionRows.resize(shapes.size() * 3);
     for (size_t si = 0; si < shapes.size(); ++si) {
@@ -333,10 +355,11 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     mStats.bvhNodes = build.stats.nodes;
     mStats.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    logInfo("scene: {} triangles, {} shapes, {} lights ({} emissive triangles), BVH {} nodes, "
-            "{:.0f} ms",
-            mStats.triangles, mStats.shapes, mStats.lights, mStats.emissiveTriangles,
-            mStats.bvhNodes, mStats.buildMs);
+    logInfo(
+        "scene: {} triangles, {} shapes, {} lights ({} emissive triangles), BVH {} nodes, "
+        "{:.0f} ms",
+        mStats.triangles, mStats.shapes, mStats.lights, mStats.emissiveTriangles, mStats.bvhNodes,
+        mStats.buildMs);
 }
 
 SceneGpu::~SceneGpu() = default;
@@ -393,20 +416,20 @@ CameraPoseGpu poseAt(const Camera& base, float time, uint32_t width, uint32_t he
 
 void SceneGpu::updateShapes(float time, bool firstFrame) {
     auto& g = *mImpl;
-    if (g.moving.empty()) return;  // static scene: nothing to do, ever
-    bool changed = false;
+    if (g.moving.empty()) return;   // static scene: nothing to do, ever
+    std::vector<VertexGpu> before;  // the previous frame's vertices, once a shape moves
     for (MovingShape& m : g.moving) {
         const Shape& shape = mScene.shapes[m.shape];
         glm::mat4 now = shapeToWorldAt(shape, time);
         m.prev = firstFrame ? now : m.now;
         if (now != m.now) {
+            if (before.empty()) before = g.cpuVertices;
             const Mesh& mesh = mScene.meshes[shape.mesh];
             transformVertices(mesh, now, g.cpuVertices.data() + m.firstVertex,
                               g.cpuPositions.data() + m.firstVertex);
             mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex,
                               mesh.positions.size() * sizeof(VertexGpu),
                               m.firstVertex * sizeof(VertexGpu));
-            changed = true;
         }
         m.now = now;
         auto rows = motionRows(m.prev, m.now);
@@ -415,32 +438,35 @@ void SceneGpu::updateShapes(float time, bool firstFrame) {
     mGpu.uploadBuffer(*g.shapeMotion, g.shapeMotionRows.data(),
                       g.shapeMotionRows.size() * sizeof(glm::vec4));
     g.shapeTime = time;
-    if (!changed) return;
+    if (before.empty()) {
+        g.infoData.previousGeometry = glm::uvec4(0u);  // the previous frame's geometry is this one
+        return;
+    }
     // Rigid motion changes the tree's boxes: rebuild it (milliseconds for the project scenes;
-    // a two-level BVH would spare the static part of large scenes).
+    // a two-level BVH would spare the static part of large scenes). The previous frame's
+    // vertices and tree stay behind this frame's.
+    const size_t vertexCount = g.cpuVertices.size();
+    mGpu.uploadBuffer(*g.vertices, before.data(), vertexCount * sizeof(VertexGpu),
+                      vertexCount * sizeof(VertexGpu));
     BvhBuild build = buildBvh(g.cpuPositions, g.cpuIndices, g.cpuMasks);
-    g.bvh.upload(mGpu, build);
-    mStats.bvhNodes = build.stats.nodes;
-}
-
-bool SceneGpu::shapesMoved() const {
-    for (const MovingShape& m : mImpl->moving)
-        if (m.prev != m.now) return true;
-    return false;
+    g.bvh.upload(mGpu, build, &g.lastBuild);
+    g.infoData.previousGeometry =
+        glm::uvec4(uint32_t(vertexCount), g.bvh.previousNodeBase, g.bvh.previousTriangleBase, 0u);
+    g.lastBuild = std::move(build);
+    mStats.bvhNodes = g.lastBuild.stats.nodes;
 }
 
 void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
     if (!mCameraDirty && time == mTime && width == mWidth && height == mHeight) return;
     auto& info = mImpl->infoData;
     const Camera& c = mScene.camera;
-    CameraPoseGpu prev = mTime < 0.0f ? poseAt(c, time + c.shutterOpen, width, height)
-                                      : info.open;
+    CameraPoseGpu prev = mTime < 0.0f ? poseAt(c, time + c.shutterOpen, width, height) : info.open;
     info.open = poseAt(c, time + c.shutterOpen, width, height);
     info.close = poseAt(c, time + c.shutterClose, width, height);
     // Previous frame's pose: the last uploaded open pose (same pose on the first frame).
     info.prev = (mTime < 0.0f || width != mWidth || height != mHeight) ? info.open : prev;
-    mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
     if (time != mTime) updateShapes(time + c.shutterOpen, mTime < 0.0f);
+    mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
     if (time != mTime || mCameraDirty) ++mRevision;
     mTime = time;
     mWidth = width;

@@ -25,17 +25,14 @@ public:
     // Binds every scene buffer by the GLSL names of the scene libraries.
     void bind(gpu::Bindings& bindings) const;
     // Camera poses and moving shapes (Shape::path) for frame time t (in frames) at the given
-    // aspect ratio; uploads when changed. The previous frame (motion vectors) is the last
-    // different time set.
+    // aspect ratio; uploads when changed. The previous frame (motion vectors, and the previous
+    // geometry that scene.glsl's scene_select_frame switches to) is the last different time set.
     void setFrame(float time, uint32_t width, uint32_t height);
     // Replaces the camera (Lua / inspector); bumps revision().
     void setCamera(const Camera& camera);
 
     const Scene& cpu() const { return mScene; }
     const SceneStats& stats() const { return mStats; }
-    // Whether a shape moved between the previous frame time and this one: temporal reuse then
-    // evaluates previous-frame targets again in this frame's geometry (ReSTIRPTTemporal).
-    bool shapesMoved() const;
     // Changes whenever the camera or frame time changes: passes with history reset on it.
     uint64_t revision() const { return mRevision; }
     // World-space bounding sphere.

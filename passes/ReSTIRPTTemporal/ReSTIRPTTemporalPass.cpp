@@ -42,6 +42,11 @@ public:
             .doc(
                 "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
                 "both combined by MIS (Zhang et al. 2024, Sec. 6; needs mis = balance)");
+        r.paramEnum("movingSuffix", "reject", {"reject", "reuse"})
+            .doc(
+                "paths with a cached suffix after the reconnection vertex when shapes moved since "
+                "the previous frame: reject (the temporal shift fails: exact) or reuse the "
+                "suffix's radiance unchecked (biased near moving shapes)");
         r.param("countFailedShifts", false)
             .doc(
                 "ablation, biased: with mis=uniform, count the history even when the current "
@@ -73,8 +78,8 @@ public:
             .set("confidenceCap", float(param<double>("confidenceCap")))
             .set("normalThreshold", float(param<double>("normalThreshold")))
             .set("depthThreshold", float(param<double>("depthThreshold")))
-            .set("shapesMoved", uint32_t(ctx.scene().shapesMoved()))
-            .set("dofShifts", restir::dofShiftBits(param<std::string>("dofShift")));
+            .set("dofShifts", restir::dofShiftBits(param<std::string>("dofShift")))
+            .set("rejectMovingSuffix", uint32_t(param<std::string>("movingSuffix") == "reject"));
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }

@@ -36,6 +36,9 @@ layout(std430) readonly buffer BvhAdjacency { ivec4 data[]; } bvh_adjacency;
 ivec3 bvh_adjacent(uint prim) { return bvh_adjacency.data[prim].xyz; }
 
 #define BVH_MASK_ALL 0xffu
+// Which tree rays traverse: node and triangle-record bases (0: the first tree; a scene with
+// moving shapes keeps the previous frame's tree behind it, see shading.glsl scene_select_frame).
+uint bvh_node_base = 0u, bvh_tri_base = 0u;
 // The stack holds one node group per tree level at most; the builder bounds the depth
 // (kBvhMaxDepth). The top 8 entries live in registers, deeper ones spill to a local array.
 #define BVH_STACK_SIZE 32
@@ -136,7 +139,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
             sp++;
         }
 
-        uint texel = 5u * node;
+        uint texel = 5u * (bvh_node_base + node);
         uvec4 w0 = BVH_NODE_TEXEL(texel), w1 = BVH_NODE_TEXEL(texel + 1u);
         uvec4 w2 = BVH_NODE_TEXEL(texel + 2u), w3 = BVH_NODE_TEXEL(texel + 3u);
         uvec4 w4 = BVH_NODE_TEXEL(texel + 4u);
@@ -177,7 +180,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
 #ifdef BVH_STATS
             bvh_stat_tris++;
 #endif
-            uint index = w1.y + uint(bitCount(leaf_bits & ((1u << k) - 1u)));
+            uint index = bvh_tri_base + w1.y + uint(bitCount(leaf_bits & ((1u << k) - 1u)));
             if (bvh_intersect_triangle(index, o, d, tmin, hit.t, mask, hit)) {
                 found = true;
                 if (any_hit) return true;

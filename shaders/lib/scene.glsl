@@ -49,6 +49,9 @@ struct SceneInfo {
     CameraPose camera_prev;   // previous frame (shutter open)
     uvec4 counts;             // triangles, shapes, lights, environment light index (~0u: none)
     vec4 bounds_center;       // xyz, w = bounding-sphere radius
+    // The previous frame's geometry (moving shapes): base of its vertices in scene_vertices,
+    // of its BVH in the node image and triangle records; all 0 when it is this frame's.
+    uvec4 previous_geometry;
 };
 
 layout(std430) readonly buffer SceneVertices { VertexGpu scene_vertices[]; };
@@ -63,6 +66,10 @@ layout(std430) readonly buffer SceneInfoBuffer { SceneInfo scene_info; };
 // the same surface point at the previous frame (shapes moving along a keyframe path; the
 // identity for static shapes). Only motion vectors and temporal reuse need it.
 layout(std430) readonly buffer SceneShapeMotion { vec4 scene_shape_motion[]; };
+
+// Which frame's vertices surface points are evaluated in: 0 this one, else
+// scene_info.previous_geometry.x (set through shading.glsl's scene_select_frame).
+uint scene_vertex_base = 0u;
 
 // Where the surface point p of `shape` was on the previous frame (rigid shape motion).
 vec3 previous_position(uint shape, vec3 p) {
@@ -106,14 +113,16 @@ struct SurfacePoint {
 
 void triangle_positions(uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     uvec4 tri = scene_triangles[prim];
-    p0 = scene_vertices[tri.x].position_u.xyz;
-    p1 = scene_vertices[tri.y].position_u.xyz;
-    p2 = scene_vertices[tri.z].position_u.xyz;
+    p0 = scene_vertices[scene_vertex_base + tri.x].position_u.xyz;
+    p1 = scene_vertices[scene_vertex_base + tri.y].position_u.xyz;
+    p2 = scene_vertices[scene_vertex_base + tri.z].position_u.xyz;
 }
 
 SurfacePoint surface_point(uint prim, vec2 bary) {
     uvec4 tri = scene_triangles[prim];
-    VertexGpu v0 = scene_vertices[tri.x], v1 = scene_vertices[tri.y], v2 = scene_vertices[tri.z];
+    VertexGpu v0 = scene_vertices[scene_vertex_base + tri.x];
+    VertexGpu v1 = scene_vertices[scene_vertex_base + tri.y];
+    VertexGpu v2 = scene_vertices[scene_vertex_base + tri.z];
     float b0 = 1.0 - bary.x - bary.y;
     SurfacePoint s;
     s.prim = prim;

@@ -18,6 +18,15 @@ struct ShadingPoint {
     vec3 emission;  // shape radiance (0 when not a light)
 };
 
+// Evaluates surface points and traces rays in the previous frame's geometry (moving shapes;
+// temporal reuse) or in this frame's (the default). Everything else is the same in both frames.
+void scene_select_frame(bool previous) {
+    uvec4 g = previous ? scene_info.previous_geometry : uvec4(0u);
+    scene_vertex_base = g.x;
+    bvh_node_base = g.y;
+    bvh_tri_base = g.z;
+}
+
 vec3 shading_to_local(ShadingPoint s, vec3 w) { return vec3(dot(w, s.t), dot(w, s.b), dot(w, s.n)); }
 vec3 shading_to_world(ShadingPoint s, vec3 w) { return w.x * s.t + w.y * s.b + w.z * s.n; }
 

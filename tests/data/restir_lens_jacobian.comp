@@ -16,8 +16,8 @@ bool lens_y(RestirSettings cfg, PathSample s, ivec2 a, ivec2 b, uint prim, out v
     u = vec2(0.0);
     J = 0.0;
     if (!primary_valid(src) || (prim != ~0u && src.hit.x != prim)) return false;
-    if (!restir_primary_reconnect(s, src, vec2(a) + s.film_lens.xy, pose, vec2(b) + s.film_lens.xy,
-                                  pose, pc.frameSize, sy, dst, J))
+    if (!restir_primary_reconnect(s, src, vec2(a) + s.film_lens.xy, pose, false, vec2(b) + s.film_lens.xy,
+                                  pose, false, pc.frameSize, sy, dst, J))
         return false;
     u = sy.film_lens.zw;
     return true;

@@ -3,8 +3,10 @@
 //
 // Statistics: frames of one ReSTIR sequence are correlated through temporal and spatial reuse,
 // so the independent unit is a whole sequence (history reset, new seed). Each sequence's mean
-// image is one sample; the spread over sequences gives the standard error. The comparison uses
-// 2x2 luminance regions against a path-traced reference rendered at the same frame times.
+// image is one sample; the spread over sequences gives the standard error. The comparison is
+// against a path-traced reference rendered at the same frame times, in luminance, on 2x2 regions
+// (|z| < 3) and on 8x8 regions (4x4-pixel blocks at 32x32: |z| < 4.5, Bonferroni for 64
+// comparisons; a bias confined to one block is diluted 16x in the coarse regions).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -61,10 +63,17 @@ ImageData toLuminance(const ImageData& img) {
 }
 
 // `sequences` independent runs of `frames` frames each (frame f at time t0 + f * dt); each
-// run's mean image is one sample of the returned statistics.
-RegionStats sequenceStats(Renderer& r, const std::string& port, int sequences, int frames, float dt,
-                          int regions = 2) {
-    RegionStats stats(regions);
+// run's mean image is one sample of the returned statistics (coarse, fine regions).
+constexpr int kCoarseRegions = 2;
+// LOOM_RESTIR_FINE changes the fine regions for exploration (the threshold stays Bonferroni for
+// 64; e.g. 32 gives single pixels at 32x32).
+const int kFineRegions = std::getenv("LOOM_RESTIR_FINE") ? std::atoi(std::getenv("LOOM_RESTIR_FINE")) : 8;
+constexpr double kCoarseZ = 3.0, kFineZ = 4.5;
+
+std::pair<RegionStats, RegionStats> sequenceStats(Renderer& r, const std::string& port,
+                                                  int sequences, int frames, float dt) {
+    std::pair<RegionStats, RegionStats> stats{RegionStats(kCoarseRegions),
+                                              RegionStats(kFineRegions)};
     for (int s = 0; s < sequences; ++s) {
         r.setSeed(1000u + 7919u * uint32_t(s));
         r.reset();
@@ -80,13 +89,17 @@ RegionStats sequenceStats(Renderer& r, const std::string& port, int sequences, i
             }
         }
         for (auto& v : mean.pixels) v /= float(frames);
-        stats.add(toLuminance(mean));
+        ImageData y = toLuminance(mean);
+        stats.first.add(y);
+        stats.second.add(y);
     }
     return stats;
 }
 
 struct Comparison {
-    double z = 0, restir = 0, reference = 0;
+    double z = 0, restir = 0, reference = 0;  // coarse regions: worst |z| and its means
+    double zFine = 0;                         // fine regions: worst |z|
+    bool unbiased() const { return z < kCoarseZ && zFine < kFineZ; }
 };
 
 // LOOM_RESTIR_SEQUENCES raises the sequence count for a deeper (slower) check than CI's.
@@ -99,7 +112,7 @@ Comparison compareWithReference(const scene::Scene& scene, const std::string& gr
                                 const json& overrides, float dt, int size = 32,
                                 int sequences = defaultSequences(), int frames = 8) {
     Comparison c;
-    RegionStats restir(2), reference(2);
+    std::pair<RegionStats, RegionStats> restir{RegionStats(1), RegionStats(1)}, reference = restir;
     {
         Renderer r(test::gpuContext(), restirGraph(graphFile, overrides), size, size, 1);
         r.setScene(scene);
@@ -110,9 +123,22 @@ Comparison compareWithReference(const scene::Scene& scene, const std::string& gr
         r.setScene(scene);
         reference = sequenceStats(r, "pt.color", sequences, frames, dt);
     }
-    c.z = maxZ(restir, reference, &c.restir, &c.reference);
-    std::printf("[ restir  ] %s %s: max |z| %.2f (%.5g vs %.5g)\n", graphFile.c_str(),
-                overrides.dump().c_str(), c.z, c.restir, c.reference);
+    c.z = maxZ(restir.first, reference.first, &c.restir, &c.reference);
+    c.zFine = maxZ(restir.second, reference.second);
+    if (std::getenv("LOOM_RESTIR_REGIONS")) {  // diagnostics: fine regions, relative difference
+        for (int y = 0; y < kFineRegions; ++y) {
+            for (int x = 0; x < kFineRegions; ++x) {
+                size_t i = size_t(y * kFineRegions + x) * 3;
+                double a = restir.second.mean(i), b = reference.second.mean(i);
+                double z = (a - b) / std::sqrt(restir.second.stderr2(i) +
+                                               reference.second.stderr2(i) + 1e-30);
+                std::printf(" %+6.1f%%(%+4.1f)", 100.0 * (a - b) / std::max(b, 1e-9), z);
+            }
+            std::printf("\n");
+        }
+    }
+    std::printf("[ restir  ] %s %s: max |z| %.2f (%.5g vs %.5g), fine regions %.2f\n",
+                graphFile.c_str(), overrides.dump().c_str(), c.z, c.restir, c.reference, c.zFine);
     return c;
 }
 
@@ -124,18 +150,19 @@ Comparison compareWithReference(const std::string& scenePath, const std::string&
 }  // namespace
 
 // Unbiasedness: the mean of ReSTIR PT over independent sequences equals the reference within 3
-// standard errors in every 2x2 region (4 comparisons; P(|z| > 3) under the null ~0.01).
+// standard errors in every 2x2 region (4 comparisons; P(|z| > 3) under the null ~0.01) and
+// within 4.5 in every 8x8 region (64 comparisons, ~0.01 together).
 TEST(ReSTIRPT, UnbiasedCornellStaticCamera) {
     auto c =
         compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json", {}, 0.0f);
-    EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
+    EXPECT_TRUE(c.unbiased()) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
 TEST(ReSTIRPT, UnbiasedCornellMovingCamera) {
     // cornell_box.json's camera path: 3 frames of the path per rendered frame.
     auto c =
         compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json", {}, 3.0f);
-    EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
+    EXPECT_TRUE(c.unbiased()) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
 // Russian roulette from the first vertex after the reconnection vertex (the default starts at
@@ -144,20 +171,20 @@ TEST(ReSTIRPT, UnbiasedCornellMovingCamera) {
 TEST(ReSTIRPT, UnbiasedWithRussianRouletteInTheSuffix) {
     auto c = compareWithReference(sourcePath("scenes/cornell_box.json"), "restir_pt.json",
                                   {{"initial.rrDepth", 1}}, 0.0f);
-    EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
+    EXPECT_TRUE(c.unbiased()) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
 TEST(ReSTIRPT, UnbiasedGlossyMovingCamera) {
     auto c =
         compareWithReference(sourcePath("scenes/glossy_spheres.json"), "restir_pt.json", {}, 2.0f);
-    EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
+    EXPECT_TRUE(c.unbiased()) << "restir " << c.restir << " vs reference " << c.reference;
 }
 
 TEST(ReSTIRPT, UnbiasedEveryShiftAndAblation) {
     std::string scene = sourcePath("scenes/glossy_spheres.json");
     for (const char* shift : {"reconnection", "replay"}) {
         auto c = compareWithReference(scene, "restir_pt.json", {{"initial.shift", shift}}, 2.0f);
-        EXPECT_LT(c.z, 3.0) << shift << ": restir " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << shift << ": restir " << c.restir << " vs " << c.reference;
     }
     // Hybrid with a high roughness threshold: the spheres with alpha <= 0.2 are then replayed
     // through before reconnecting (k >= 3), which the default threshold (alpha > 0.04) rarely
@@ -165,25 +192,26 @@ TEST(ReSTIRPT, UnbiasedEveryShiftAndAblation) {
     {
         auto c = compareWithReference(scene, "restir_pt.json",
                                       {{"initial.roughnessThreshold", 0.5}}, 2.0f);
-        EXPECT_LT(c.z, 3.0) << "threshold 0.5: restir " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << "threshold 0.5: restir " << c.restir << " vs " << c.reference;
     }
     for (const char* mis : {"pairwise", "balance"}) {
         auto c = compareWithReference(scene, "restir_pt.json", {{"spatial.mis", mis}}, 2.0f);
-        EXPECT_LT(c.z, 3.0) << "spatial " << mis << ": restir " << c.restir << " vs "
-                            << c.reference;
+        EXPECT_TRUE(c.unbiased()) << "spatial " << mis << ": restir " << c.restir << " vs "
+                                  << c.reference;
     }
     for (const char* graph : {"restir_pt_spatial_only.json", "restir_pt_temporal_only.json"}) {
         auto c = compareWithReference(scene, graph, {}, 2.0f);
-        EXPECT_LT(c.z, 3.0) << graph << ": restir " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << graph << ": restir " << c.restir << " vs " << c.reference;
     }
 }
 
 // Moving shapes: the Cornell box with the tall box sliding and turning over the 8 frames of a
-// sequence (static camera). Temporal reuse evaluates previous-frame targets in this frame's
-// geometry, consistently for both MIS terms (temporal.comp). At this depth the test catches
-// mixing stored and re-evaluated targets (|z| 4.1); the residual darkening from paths blocked
-// only in the previous frame's geometry (~2%, |z| 4.5 at LOOM_RESTIR_SEQUENCES=96) needs the
-// previous frame's BVH, which Loom does not keep (ReSTIRPTTemporal README).
+// sequence (static camera). Temporal shifts evaluate each domain in its own frame's geometry
+// (the previous frame's vertices and BVH stay on the GPU), and paths whose cached suffix could
+// have changed do not cross frames (temporal.movingSuffix = reject). Reusing that suffix
+// unchecked is biased near the box (+27% in a 4x4-pixel block next to its base, -9% beside it),
+// which the fine regions see; re-evaluating previous targets in this frame's geometry instead
+// (the previous version) was 2% dark overall.
 TEST(ReSTIRPT, UnbiasedWithMovingShapes) {
     json scene = json::parse(test::readFile(sourcePath("scenes/cornell_box.json")));
     scene["camera"].erase("path");
@@ -194,8 +222,12 @@ TEST(ReSTIRPT, UnbiasedWithMovingShapes) {
     test::TempDir tmp("loom-restir-moving");
     std::string path = tmp / "cornell_moving.json";
     test::writeFile(path, scene.dump());
-    auto c = compareWithReference(scene::loadScene(path), "restir_pt.json", {}, 1.0f);
-    EXPECT_LT(c.z, 3.0) << "restir " << c.restir << " vs reference " << c.reference;
+    scene::Scene moving = scene::loadScene(path);
+    auto c = compareWithReference(moving, "restir_pt.json", {}, 1.0f);
+    EXPECT_TRUE(c.unbiased()) << "restir " << c.restir << " vs reference " << c.reference;
+    auto cached =
+        compareWithReference(moving, "restir_pt.json", {{"temporal.movingSuffix", "reuse"}}, 1.0f);
+    EXPECT_FALSE(cached.unbiased()) << "the stale-suffix bias was not detected";
 }
 
 // Area ReSTIR: film and lens samples are part of the path sample and are replayed at the
@@ -204,7 +236,7 @@ TEST(AreaReSTIR, UnbiasedStaticAndMovingCamera) {
     std::string scene = sourcePath("scenes/cornell_box.json");
     for (float dt : {0.0f, 3.0f}) {
         auto c = compareWithReference(scene, "area_restir.json", {}, dt);
-        EXPECT_LT(c.z, 3.0) << "dt " << dt << ": " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << "dt " << dt << ": " << c.restir << " vs " << c.reference;
     }
 }
 
@@ -214,7 +246,7 @@ TEST(AreaReSTIR, UnbiasedTemporalVariants) {
     for (const char* variant : {"fast", "robust", "copy"}) {
         auto c = compareWithReference(scene, "area_restir.json",
                                       {{"temporal.areaReprojection", variant}}, 2.0f);
-        EXPECT_LT(c.z, 3.0) << variant << ": " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << variant << ": " << c.restir << " vs " << c.reference;
     }
 }
 
@@ -227,17 +259,17 @@ TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
     s.camera.focusDistance = 5.5f;
     for (const char* graph : {"area_restir.json", "restir_pt.json"}) {
         auto c = compareWithReference(s, graph, {}, 3.0f);
-        EXPECT_LT(c.z, 3.0) << graph << ": " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << graph << ": " << c.restir << " vs " << c.reference;
     }
     for (const char* shift : {"copy", "reconnect"}) {
         auto c = compareWithReference(s, "area_restir.json", {{"spatial.dofShift", shift}}, 3.0f);
-        EXPECT_LT(c.z, 3.0) << shift << ": " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << shift << ": " << c.restir << " vs " << c.reference;
     }
     // Temporal reuse by primary-hit reconnection alone (the default combines it with copy).
     {
         auto c =
             compareWithReference(s, "area_restir.json", {{"temporal.dofShift", "reconnect"}}, 3.0f);
-        EXPECT_LT(c.z, 3.0) << "temporal reconnect: " << c.restir << " vs " << c.reference;
+        EXPECT_TRUE(c.unbiased()) << "temporal reconnect: " << c.restir << " vs " << c.reference;
     }
 }
 
@@ -284,7 +316,7 @@ TEST(ReSTIRPT, FailedShiftInDenominatorIsDetected) {
     std::string scene = sourcePath("scenes/glossy_spheres.json");
     auto good = compareWithReference(scene, "restir_pt_temporal_only.json",
                                      {{"temporal.mis", "uniform"}}, 2.0f);
-    EXPECT_LT(good.z, 3.0) << "uniform MIS: " << good.restir << " vs " << good.reference;
+    EXPECT_TRUE(good.unbiased()) << "uniform MIS: " << good.restir << " vs " << good.reference;
     auto bad = compareWithReference(
         scene, "restir_pt_temporal_only.json",
         {{"temporal.mis", "uniform"}, {"temporal.countFailedShifts", true}}, 2.0f);
@@ -460,4 +492,17 @@ TEST(ReSTIRPT, JacobianAndMisWeights) {
     }
     EXPECT_GT(pssChecked, int(n) / 4);
     EXPECT_LT(pssWorst, 1e-2) << "PSS reconnection Jacobian vs finite differences";
+}
+
+// Exploration (not run by default): LOOM_RESTIR_EXPLORE='{"scene": "scenes/cornell_box.json",
+// "graph": "area_restir.json", "dt": 3, "overrides": {...}}' with LOOM_RESTIR_REGIONS=1 and
+// --gtest_also_run_disabled_tests prints one comparison's fine regions.
+TEST(ReSTIRPT, DISABLED_Explore) {
+    const char* e = std::getenv("LOOM_RESTIR_EXPLORE");
+    if (!e) GTEST_SKIP() << "set LOOM_RESTIR_EXPLORE";
+    json cfg = json::parse(e);
+    auto c = compareWithReference(sourcePath(cfg.value("scene", "scenes/cornell_box.json")),
+                                  cfg.value("graph", "restir_pt.json"),
+                                  cfg.value("overrides", json::object()), cfg.value("dt", 0.0f));
+    EXPECT_TRUE(c.unbiased());
 }

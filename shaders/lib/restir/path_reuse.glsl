@@ -9,11 +9,14 @@
 
 // Geometric similarity of two primary hits (a technique-set choice, independent of samples, so
 // any rule is unbiased): normals within normal_threshold (cosine) and camera distances within
-// depth_threshold relative.
-bool restir_similar(PrimaryHit a, PrimaryHit b, float normal_threshold, float depth_threshold) {
+// depth_threshold relative. a is this frame's; b_previous: b is the previous frame's.
+bool restir_similar(PrimaryHit a, PrimaryHit b, bool b_previous, float normal_threshold,
+                    float depth_threshold) {
     if (!primary_valid(a) || !primary_valid(b)) return false;
     SurfacePoint sa = surface_point(a.hit.x, uintBitsToFloat(a.hit.yz));
+    scene_select_frame(b_previous);
     SurfacePoint sb = surface_point(b.hit.x, uintBitsToFloat(b.hit.yz));
+    scene_select_frame(false);
     if (dot(sa.ns, sb.ns) < normal_threshold) return false;
     float da = length(sa.p - a.camera.xyz), db = length(sb.p - b.camera.xyz);
     return abs(da - db) <= depth_threshold * max(da, db);
@@ -68,17 +71,24 @@ float projection_area_ratio(vec3 P, vec3 a, vec3 n_a, vec3 b, vec3 n_b) {
 // copies the offset, temporal reuse translates it by the motion vector); only the lens sample
 // of s_dst is set. J = |d lens_y / d lens_x| (lens area, = primary sample space: the concentric
 // mapping preserves area): lens_x -> x1 -> lens_y are two central projections through the
-// focal points P_x and P_y.
+// focal points P_x and P_y. src_previous / dst_previous: the frames whose geometry the domains
+// belong to (temporal reuse with moving shapes: x1 keeps its surface coordinates, and rigid
+// motion keeps areas); the destination frame is left selected (scene_select_frame).
 bool restir_primary_reconnect(PathSample s, PrimaryHit src, vec2 src_film, CameraPose src_pose,
-                              vec2 dst_film, CameraPose dst_pose, uvec2 frame_size,
-                              out PathSample s_dst, out PrimaryHit dst, out float J) {
+                              bool src_previous, vec2 dst_film, CameraPose dst_pose,
+                              bool dst_previous, uvec2 frame_size, out PathSample s_dst,
+                              out PrimaryHit dst, out float J) {
     s_dst = s;
     dst = src;
     J = 0.0;
+    scene_select_frame(dst_previous);
     if (!primary_valid(src)) return false;
     CameraFrame cx = camera_frame(src_pose, src_pose, 0.0);
     CameraFrame cy = camera_frame(dst_pose, dst_pose, 0.0);
     if (cy.aperture <= 0.0 || cx.aperture <= 0.0) return false;
+    scene_select_frame(src_previous);
+    SurfacePoint x1_src = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
+    scene_select_frame(dst_previous);
     SurfacePoint x1 = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
     vec3 Px = camera_focal_point(cx, src_film / vec2(frame_size));
     vec3 Py = camera_focal_point(cy, dst_film / vec2(frame_size));
@@ -98,7 +108,7 @@ bool restir_primary_reconnect(PathSample s, PrimaryHit src, vec2 src_film, Camer
     atomicAdd(shift_rays, 1u);
     if (trace_any(Ly, v / dist, 0.0, dist * (1.0 - 1e-3), BVH_MASK_ALL)) return false;
     vec3 Lx = src.camera.xyz;
-    J = projection_area_ratio(Px, Lx, cx.forward, x1.p, x1.ng) *
+    J = projection_area_ratio(Px, Lx, cx.forward, x1_src.p, x1_src.ng) *
         projection_area_ratio(Py, x1.p, x1.ng, Ly, cy.forward);
     dst.camera = vec4(Ly, 1.0);
     return J > 0.0 && !isinf(J);

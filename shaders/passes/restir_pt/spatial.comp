@@ -43,7 +43,7 @@ bool pick_neighbour(inout Rng rng, uvec2 pixel, PrimaryHit hc, out ivec2 q) {
     if (all(equal(q, ivec2(pixel))) || any(lessThan(q, ivec2(0))) ||
         any(greaterThanEqual(q, ivec2(pc.frameSize))))
         return false;
-    return restir_similar(hc, primary_in[uint(q.y) * pc.frameSize.x + uint(q.x)],
+    return restir_similar(hc, primary_in[uint(q.y) * pc.frameSize.x + uint(q.x)], false,
                           pc.normalThreshold, pc.depthThreshold);
 }
 
@@ -123,8 +123,8 @@ void main() {
         PrimaryHit dst = base;
         float J = 1.0;
         bool ok = copy || restir_primary_reconnect(s_src, base, vec2(q_src) + s_src.film_lens.xy, pose,
-                                                    vec2(q_dst) + s_src.film_lens.xy, pose,
-                                                    pc.frameSize, s_dst, dst, J);
+                                                    false, vec2(q_dst) + s_src.film_lens.xy, pose,
+                                                    false, pc.frameSize, s_dst, dst, J);
         vec3 F = ok ? restir_shift(cfg, s_dst, dst) : vec3(0.0);
         if (to_here) {
             F_here[a] = F;

@@ -36,8 +36,8 @@ layout(push_constant) uniform Params {
     float confidenceCap;
     float normalThreshold;
     float depthThreshold;
-    uint shapesMoved;  // the scene's shapes moved since the previous frame
     uint dofShifts;    // Area ReSTIR under a thin lens: SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits
+    uint rejectMovingSuffix;  // movingSuffix = reject
 } pc;
 
 // Area ReSTIR temporal reprojection (Zhang et al. 2024, Sec. 5). Samples carry film positions, so
@@ -51,7 +51,7 @@ const uint AREA_COPY = 2u;    // one previous pixel, subpixel offset copied (no 
 
 bool prev_pixel_usable(ivec2 q, PrimaryHit hc) {
     if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(pc.frameSize)))) return false;
-    return restir_similar(hc, primary_prev[uint(q.y) * pc.frameSize.x + uint(q.x)],
+    return restir_similar(hc, primary_prev[uint(q.y) * pc.frameSize.x + uint(q.x)], true,
                           pc.normalThreshold, pc.depthThreshold);
 }
 
@@ -62,19 +62,24 @@ uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 // its own domain (pixel src_q of this or the previous frame) to film offset dst_off of pixel
 // dst_q, by lens-vertex copy (film offset and lens sample replayed) or, for Area ReSTIR under a
 // thin lens, by primary-hit reconnection (x1 kept, lens point solved; Zhang et al. 2024 Sec. 6).
-// Jobs: the canonical sample to its previous-frame partner (one per shift), the previous
-// samples to this pixel (one per shift), and when shapes moved each previous sample at its own
-// previous pixel.
+// Jobs: the canonical sample to its previous-frame partner (one per shift) and the previous
+// samples to this pixel (one per shift). A job is evaluated in its destination frame's
+// geometry (scene_select_frame), so with moving shapes the canonical sample's target in the
+// previous domain sees the previous frame's shapes, as the stored previous targets did.
 //
-// Moving shapes: only this frame's geometry is on the GPU, so the canonical sample's target in
-// the previous domain is evaluated in it. The MIS weights stay a partition of unity only if the
-// previous samples' own targets come from the same function, so they are evaluated again in
-// this geometry instead of using the stored ones (exact for a static scene, where both agree
-// and the extra shifts are skipped). What remains approximate is the support: a path that
-// exists now but was blocked in the previous frame's geometry still lowers the canonical
-// weight.
+// What a shift cannot re-evaluate is the suffix after the reconnection vertex x_k (k < n): its
+// radiance is cached (rc_Lo), valid only where nothing it saw has moved. So when shapes moved
+// between the frames, the temporal shift of such a path fails in both directions
+// (movingSuffix = reject): the history technique then does not cover these paths and the
+// canonical technique keeps their whole weight, which is exact. Paths reconnecting at the light
+// vertex (k = n) and pure replay (k = 0) are re-evaluated completely in either geometry.
+bool shift_crosses_moved_suffix(PathSample s) {
+    uint k = path_rc_index(s);
+    return pc.rejectMovingSuffix != 0u && scene_info.previous_geometry.x != 0u && k != 0u &&
+           k < path_length(s);
+}
 const uint MAX_PREV_SLOTS = 4u;
-const uint MAX_JOBS = 2u + 3u * MAX_PREV_SLOTS;
+const uint MAX_JOBS = 2u + 2u * MAX_PREV_SLOTS;
 struct ShiftJob {
     PathSample s;     // in its own domain
     ivec2 src_q;
@@ -222,7 +227,7 @@ void main() {
     }
 
     // Jobs: [0, n_c) canonical -> partner, one per shift; [n_c, n_c + n_in * n_shifts) previous
-    // samples -> here; then the re-evaluations of moving shapes.
+    // samples -> here.
     ShiftJob jobs[MAX_JOBS];
     uint n_jobs = 0u;
     for (uint sh = SHIFT_COPY; sh <= SHIFT_PRIMARY_RECONNECT; sh <<= 1)
@@ -235,11 +240,6 @@ void main() {
                 jobs[n_jobs++] = shift_job(in_s[i], slot_q[in_slot[i]], 1u, ivec2(pixel), 0u,
                                            in_off[i], sh, in_slot[i]);
     uint n_here = n_jobs;
-    if (pc.shapesMoved != 0u)
-        for (uint i = 0u; i < n_in; ++i) {
-            ivec2 q = slot_q[in_slot[i]];
-            jobs[n_jobs++] = shift_job(in_s[i], q, 1u, q, 1u, in_s[i].film_lens.xy, SHIFT_COPY, in_slot[i]);
-        }
 
     vec3 F[MAX_JOBS];
     float J[MAX_JOBS];
@@ -251,26 +251,30 @@ void main() {
         CameraPose dst_pose = pose_of(job.dst_prev);
         PrimaryHit dst;
         J[j] = 1.0;
-        bool ok = true;
+        bool ok = !shift_crosses_moved_suffix(job.s);
         if (job.shift == SHIFT_COPY) {
             // Copy: replay the film/lens sample in the destination (Jacobian 1).
+            scene_select_frame(job.dst_prev != 0u);
             dst = restir_domain_primary(cfg, s_dst, primary_of(job.dst_prev, job.dst_q), job.dst_q,
                                         dst_pose);
         } else {
             // Reconnection: the source domain's primary hit, kept, with the lens point solved for
             // in the destination.
             CameraPose src_pose = pose_of(job.src_prev);
+            scene_select_frame(job.src_prev != 0u);
             PrimaryHit src = restir_domain_primary(cfg, job.s, primary_of(job.src_prev, job.src_q),
                                                    job.src_q, src_pose);
             PathSample s_rec;
-            ok = restir_primary_reconnect(job.s, src, vec2(job.src_q) + job.s.film_lens.xy, src_pose,
-                                          vec2(job.dst_q) + job.dst_off, dst_pose, pc.frameSize,
-                                          s_rec, dst, J[j]);
+            ok = ok && restir_primary_reconnect(job.s, src, vec2(job.src_q) + job.s.film_lens.xy, src_pose,
+                                          job.src_prev != 0u, vec2(job.dst_q) + job.dst_off,
+                                          dst_pose, job.dst_prev != 0u, pc.frameSize, s_rec, dst,
+                                          J[j]);
             s_dst.film_lens.zw = s_rec.film_lens.zw;
         }
         F[j] = ok ? restir_shift(cfg, s_dst, dst) : vec3(0.0);
         s_out[j] = s_dst;
     }
+    scene_select_frame(false);
 
     // Pairwise MIS over the shifts (Lin et al. 2022 Sec. 7.2, non-defensive; with one shift the
     // 2-technique balance heuristic): technique (q, shift) with confidence M_q / n_shifts,
@@ -281,14 +285,12 @@ void main() {
     PathReservoir r = reservoir_empty();
     for (uint j = n_c; j < n_here; ++j) {
         uint sl = jobs[j].source;
-        uint i = (j - n_c) / uint(n_shifts);
         PathReservoir rq = reservoirs_prev[pixel_index(slot_q[sl])];
         float t_prev = rq.target, W = rq.W;
         if (fractional && pc.areaVariant == AREA_FAST) {
             t_prev = frac_r.target;
             W = W_frac;
         }
-        if (pc.shapesMoved != 0u) t_prev = luminance(F[n_here + i]);
         float t_qc = luminance(F[j]);
         float m_q;
         if (pc.mis == TEMPORAL_MIS_BALANCE) {
