@@ -27,6 +27,9 @@
 --   estimates at equal time per frame (how Lin et al. 2022 compare ReSTIR PT with PT).
 -- Metrics: relMSE and MAPE (loom.metrics, eps 0.01) and relMSE without the worst `trim`
 -- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
+-- Still/moving rows also give the rays traced per frame (every pass's `rays` stat) and the
+-- ratio at equal rays: the first configuration's relMSE scaled to the samples per pixel this
+-- one's rays would buy (relMSE ~ 1/spp), a proxy for GPU time where BVH traversal dominates.
 --
 -- Arguments: scenes (comma list; missing files are skipped), cameras (static,still,moving), width,
 -- height, budget_ms, steps, move_frames, move_degrees, repeats, seed, ref_frames, ref_spp,
@@ -238,6 +241,7 @@ for _, scene_arg in ipairs(scenes) do
           r:set(cfg.spp_param, spp)
         end
         local sum_relmse, sum_trim, sum_mape, sum_ms, total_frames = 0, 0, 0, 0, 0
+        local sum_rays = 0
         for rep = 1, repeats do
           r:set_seed(seed + 100 * rep)
           r:set_time(0)
@@ -248,6 +252,9 @@ for _, scene_arg in ipairs(scenes) do
             r:frame()
             sum_ms = sum_ms + r:timings().frame_ms
             total_frames = total_frames + 1
+            for key, value in pairs(r:stats()) do  -- every pass's ray counter ("pt.rays", ...)
+              if key:match("%.rays$") then sum_rays = sum_rays + value end
+            end
           end
           local img = r:image(cfg.output or "accum.output")
           sum_relmse = sum_relmse + loom.metrics.relmse(img, ref)
@@ -267,7 +274,8 @@ for _, scene_arg in ipairs(scenes) do
         rows[#rows + 1] = row
         summary[#summary + 1] = {scene = name, camera = kind, config = cfg.name,
                                  frames = total_frames, gpu_ms = sum_ms, spp = spp,
-                                 ms_per_frame = sum_ms / total_frames, relmse = row.relmse,
+                                 ms_per_frame = sum_ms / total_frames,
+                                 rays_per_frame = sum_rays / total_frames, relmse = row.relmse,
                                  relmse_trim = row.relmse_trim, mape = row.mape}
         loom.progress(#summary, #summary, name .. " " .. kind)
       end
@@ -283,6 +291,14 @@ for _, row in ipairs(summary) do
     if base.scene == row.scene and base.camera == row.camera and base.config == configs[1].name then
       row.ratio = base.relmse / row.relmse
       row.ratio_trim = base.relmse_trim / row.relmse_trim
+      -- Equal rays (a proxy for GPU time where traversal dominates): the base's relMSE scaled
+      -- to as many samples per pixel as this configuration's rays per frame buy, assuming
+      -- relMSE ~ 1 / spp for independent samples.
+      if base.spp and row.rays_per_frame and base.rays_per_frame and base.rays_per_frame > 0 then
+        local spp_equal_rays = row.rays_per_frame / (base.rays_per_frame / base.spp)
+        row.spp_equal_rays = spp_equal_rays
+        row.ratio_rays = base.relmse * base.spp / spp_equal_rays / row.relmse
+      end
     end
   end
 end
@@ -297,7 +313,9 @@ util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
                   {key = "relmse_trim", title = "relMSE trim", fmt = "%.5f"},
                   {key = "mape", title = "MAPE", fmt = "%.4f"},
                   {key = "ratio", title = configs[1].name .. "/this relMSE", fmt = "%.2f"},
-                  {key = "ratio_trim", title = "(trim)", fmt = "%.2f"}},
+                  {key = "ratio_trim", title = "(trim)", fmt = "%.2f"},
+                  {key = "rays_per_frame", title = "rays/frame", fmt = "%.0f"},
+                  {key = "ratio_rays", title = "at equal rays", fmt = "%.2f"}},
                  summary)
 print("\nGPU ms per pass (last static frame)")
 util.print_table({{key = "scene"}, {key = "config"}, {key = "pass"},
@@ -309,5 +327,5 @@ loom.write_csv(out .. "/restir_equal_time.csv", rows,
 loom.write_csv(out .. "/summary.csv", summary,
                {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
                            "ms_per_frame", "relmse", "relmse_trim", "mape", "ratio",
-                           "ratio_trim"}})
+                           "ratio_trim", "rays_per_frame", "spp_equal_rays", "ratio_rays"}})
 print(string.format("\nwrote %s/restir_equal_time.csv, %s/summary.csv and plots", out, out))

@@ -67,7 +67,8 @@ ImageData toLuminance(const ImageData& img) {
 constexpr int kCoarseRegions = 2;
 // LOOM_RESTIR_FINE changes the fine regions for exploration (the threshold stays Bonferroni for
 // 64; e.g. 32 gives single pixels at 32x32).
-const int kFineRegions = std::getenv("LOOM_RESTIR_FINE") ? std::atoi(std::getenv("LOOM_RESTIR_FINE")) : 8;
+const int kFineRegions =
+    std::getenv("LOOM_RESTIR_FINE") ? std::atoi(std::getenv("LOOM_RESTIR_FINE")) : 8;
 constexpr double kCoarseZ = 3.0, kFineZ = 4.5;
 
 std::pair<RegionStats, RegionStats> sequenceStats(Renderer& r, const std::string& port,
@@ -248,6 +249,9 @@ TEST(AreaReSTIR, UnbiasedTemporalVariants) {
                                       {{"temporal.areaReprojection", variant}}, 2.0f);
         EXPECT_TRUE(c.unbiased()) << variant << ": " << c.restir << " vs " << c.reference;
     }
+    // Several candidates per pixel, each with its own film and lens sample and primary ray.
+    auto c = compareWithReference(scene, "area_restir.json", {{"initial.candidates", 3}}, 2.0f);
+    EXPECT_TRUE(c.unbiased()) << "3 candidates: " << c.restir << " vs " << c.reference;
 }
 
 TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
@@ -502,8 +506,13 @@ TEST(ReSTIRPT, Explore) {
     const char* e = std::getenv("LOOM_RESTIR_EXPLORE");
     if (!e) GTEST_SKIP() << "set LOOM_RESTIR_EXPLORE";
     json cfg = json::parse(e);
-    auto c = compareWithReference(sourcePath(cfg.value("scene", "scenes/cornell_box.json")),
-                                  cfg.value("graph", "restir_pt.json"),
+    scene::Scene s = scene::loadScene(sourcePath(cfg.value("scene", "scenes/cornell_box.json")));
+    if (cfg.contains("aperture")) {  // thin lens: {"aperture": 0.4, "focus": 5.5}
+        s.camera.type = scene::CameraType::ThinLens;
+        s.camera.apertureRadius = cfg["aperture"].get<float>();
+        s.camera.focusDistance = cfg.value("focus", 5.5f);
+    }
+    auto c = compareWithReference(s, cfg.value("graph", "restir_pt.json"),
                                   cfg.value("overrides", json::object()), cfg.value("dt", 0.0f));
     EXPECT_TRUE(c.unbiased());
 }
