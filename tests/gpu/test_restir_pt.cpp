@@ -229,6 +229,9 @@ TEST(ReSTIRPT, UnbiasedWithMovingShapes) {
     auto cached =
         compareWithReference(moving, "restir_pt.json", {{"temporal.movingSuffix", "reuse"}}, 1.0f);
     EXPECT_FALSE(cached.unbiased()) << "the stale-suffix bias was not detected";
+    // Area ReSTIR re-traces primary rays: in the previous frame's geometry for its partner.
+    auto area = compareWithReference(moving, "area_restir.json", {}, 1.0f);
+    EXPECT_TRUE(area.unbiased()) << "area: restir " << area.restir << " vs " << area.reference;
 }
 
 // Area ReSTIR: film and lens samples are part of the path sample and are replayed at the
