@@ -1,11 +1,14 @@
 #version 460
 // Test kernel: the primary-hit reconnection Jacobian |d u_lens_y / d u_lens_x| (Area ReSTIR,
 // depth of field) against central finite differences of the lens sample, per pixel of a
-// thin-lens scene, shifting to the pixel (+1, +1). Also the inverse concentric disk mapping.
+// thin-lens scene, shifting to the pixel (+1, +1); the shift back must restore the lens sample
+// with the inverse Jacobian (T^-1(T(x)) = x). Also the inverse concentric disk mapping.
 #include "lib/restir/path_reuse.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f) uniform writeonly image2D resultImage;  // J, J_fd (-1: skipped), round-trip error
+// J, J_fd (-1: skipped), concentric round-trip error, shift round-trip error (-1: no forward
+// shift, 1e9: the shift back failed): max(|lens - lens back|, |J J_back - 1|).
+layout(rgba32f) uniform writeonly image2D resultImage;
 layout(push_constant) uniform Params { uvec2 frameSize; } pc;
 
 bool lens_y(RestirSettings cfg, PathSample s, ivec2 a, ivec2 b, uint prim, out vec2 u, out float J) {
@@ -38,7 +41,7 @@ void main() {
     PathSample s = reservoir_empty().s;
     s.film_lens = vec4(rng_next2(rng), 0.2 + 0.6 * rng_next2(rng));
     ivec2 a = ivec2(pixel), b = a + ivec2(1, 1);
-    vec4 result = vec4(0.0, -1.0, 0.0, 0.0);
+    vec4 result = vec4(0.0, -1.0, 0.0, -1.0);
     // Inverse concentric mapping round trip.
     vec2 u = rng_next2(rng);
     result.z = length(disk_concentric_inverse(sample_disk_concentric(u)) - u);
@@ -48,6 +51,13 @@ void main() {
     PrimaryHit src = restir_domain_primary(cfg, s, PrimaryHit(vec4(0.0), uvec4(~0u)), a, pose);
     if (primary_valid(src) && lens_y(cfg, s, a, b, src.hit.x, u0, J)) {
         result.x = J;
+        PathSample sy = s;
+        sy.film_lens.zw = u0;
+        vec2 u_back;
+        float J_back;
+        result.w = lens_y(cfg, sy, b, a, src.hit.x, u_back, J_back)
+                       ? max(length(u_back - s.film_lens.zw), abs(J * J_back - 1.0))
+                       : 1e9;
         const float eps = 1e-3;
         vec2 up[2], dn[2];
         float Jt;

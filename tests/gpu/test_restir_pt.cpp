@@ -303,10 +303,16 @@ TEST(AreaReSTIR, PrimaryHitReconnectionJacobian) {
     r.setScene(s);
     r.frame();
     ImageData img = r.readOutput("k.result");
-    int checked = 0, bad = 0;
+    int checked = 0, bad = 0, roundTrips = 0, badTrips = 0;
     for (uint32_t i = 0; i < img.width * img.height; ++i) {
         const float* p = &img.pixels[i * 4];
         EXPECT_LT(p[2], 1e-5f) << "inverse concentric mapping, pixel " << i;
+        if (p[3] >= 0) {  // shifted there: the shift back restores the lens sample, J_back = 1/J
+            ++roundTrips;
+            if (p[3] > 1e-3f && ++badTrips <= 5)
+                ADD_FAILURE() << "pixel " << i << ": round trip error " << p[3]
+                              << (p[3] > 1e8f ? " (the shift back failed)" : "");
+        }
         if (p[1] < 0) continue;
         ++checked;
         if (std::abs(p[0] - p[1]) > 1e-2 * p[1] && ++bad <= 5)
@@ -314,6 +320,8 @@ TEST(AreaReSTIR, PrimaryHitReconnectionJacobian) {
     }
     EXPECT_GT(checked, 1000);
     EXPECT_EQ(bad, 0);
+    EXPECT_GT(roundTrips, 1000);
+    EXPECT_EQ(badTrips, 0);
 }
 
 // The known bias class: a history whose shift fails must not stay in the MIS denominator. The
