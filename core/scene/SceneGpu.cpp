@@ -456,9 +456,33 @@ void SceneGpu::updateShapes(float time, bool firstFrame) {
     mStats.bvhNodes = g.lastBuild.stats.nodes;
 }
 
+void SceneGpu::settleShapes() {
+    auto& g = *mImpl;
+    for (MovingShape& m : g.moving) {
+        m.prev = m.now;
+        auto rows = motionRows(m.prev, m.now);
+        std::copy(rows.begin(), rows.end(), g.shapeMotionRows.begin() + long(3 * m.shape));
+    }
+    if (!g.moving.empty())
+        mGpu.uploadBuffer(*g.shapeMotion, g.shapeMotionRows.data(),
+                          g.shapeMotionRows.size() * sizeof(glm::vec4));
+    g.infoData.previousGeometry = glm::uvec4(0u);
+}
+
 void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
-    if (!mCameraDirty && time == mTime && width == mWidth && height == mHeight) return;
     auto& info = mImpl->infoData;
+    if (!mCameraDirty && time == mTime && width == mWidth && height == mHeight) {
+        // The same frame again: the previous frame is now this one (no motion; history made in
+        // this geometry).
+        if (mPreviousDiffers) {
+            info.prev = info.open;
+            settleShapes();
+            mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
+            mPreviousDiffers = false;
+        }
+        return;
+    }
+    mPreviousDiffers = true;
     const Camera& c = mScene.camera;
     CameraPoseGpu prev = mTime < 0.0f ? poseAt(c, time + c.shutterOpen, width, height) : info.open;
     info.open = poseAt(c, time + c.shutterOpen, width, height);

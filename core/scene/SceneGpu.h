@@ -25,8 +25,9 @@ public:
     // Binds every scene buffer by the GLSL names of the scene libraries.
     void bind(gpu::Bindings& bindings) const;
     // Camera poses and moving shapes (Shape::path) for frame time t (in frames) at the given
-    // aspect ratio; uploads when changed. The previous frame (motion vectors, and the previous
-    // geometry that scene.glsl's scene_select_frame switches to) is the last different time set.
+    // aspect ratio; uploads when changed. Call once per frame: the previous frame (motion
+    // vectors, and the previous geometry that scene_select_frame switches to) is the last
+    // call's, so calling again with the same time means no motion.
     void setFrame(float time, uint32_t width, uint32_t height);
     // Replaces the camera (Lua / inspector); bumps revision().
     void setCamera(const Camera& camera);
@@ -42,6 +43,8 @@ private:
     // Moves shapes with a keyframe path to frame time `time` (vertices, BVH, the per-shape
     // previous-frame maps of scene.glsl's previous_position); a no-op for static scenes.
     void updateShapes(float time, bool firstFrame);
+    // The previous frame becomes this one: identity motion maps, no previous geometry.
+    void settleShapes();
 
     struct Impl;
     std::unique_ptr<Impl> mImpl;
@@ -53,6 +56,7 @@ private:
     float mTime = -1.0f;
     uint32_t mWidth = 0, mHeight = 0;
     bool mCameraDirty = true;
+    bool mPreviousDiffers = false;  // the previous frame's camera or shapes differ from this one's
 };
 
 }  // namespace loom::scene
