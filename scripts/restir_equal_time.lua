@@ -27,7 +27,8 @@
 --   estimates at equal time per frame (how Lin et al. 2022 compare ReSTIR PT with PT).
 -- Metrics: relMSE and MAPE (loom.metrics, eps 0.01) and relMSE without the worst `trim`
 -- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
--- Still/moving rows also give the rays traced per frame (every pass's `rays` stat) and the
+-- Still/moving rows also give the standard error of relMSE over the repeats (fireflies make it
+-- large: same-estimator rows can differ 3x at 8 repeats), the rays traced per frame (every pass's `rays` stat) and the
 -- ratio at equal rays: the first configuration's relMSE scaled to the samples per pixel this
 -- one's rays would buy (relMSE ~ 1/spp), a proxy for GPU time where BVH traversal dominates.
 --
@@ -241,7 +242,7 @@ for _, scene_arg in ipairs(scenes) do
           r:set(cfg.spp_param, spp)
         end
         local sum_relmse, sum_trim, sum_mape, sum_ms, total_frames = 0, 0, 0, 0, 0
-        local sum_rays = 0
+        local sum_rays, sum_relmse2 = 0, 0
         for rep = 1, repeats do
           r:set_seed(seed + 100 * rep)
           r:set_time(0)
@@ -257,7 +258,9 @@ for _, scene_arg in ipairs(scenes) do
             end
           end
           local img = r:image(cfg.output or "accum.output")
-          sum_relmse = sum_relmse + loom.metrics.relmse(img, ref)
+          local relmse = loom.metrics.relmse(img, ref)
+          sum_relmse = sum_relmse + relmse
+          sum_relmse2 = sum_relmse2 + relmse * relmse
           sum_trim = sum_trim + trimmed_relmse(img, ref, trim)
           sum_mape = sum_mape + loom.metrics.mape(img, ref)
           if rep == 1 then
@@ -276,6 +279,8 @@ for _, scene_arg in ipairs(scenes) do
                                  frames = total_frames, gpu_ms = sum_ms, spp = spp,
                                  ms_per_frame = sum_ms / total_frames,
                                  rays_per_frame = sum_rays / total_frames, relmse = row.relmse,
+                                 relmse_se = repeats > 1 and math.sqrt(math.max(0, sum_relmse2
+                                     / repeats - row.relmse ^ 2) / (repeats - 1)) or nil,
                                  relmse_trim = row.relmse_trim, mape = row.mape}
         loom.progress(#summary, #summary, name .. " " .. kind)
       end
@@ -310,6 +315,7 @@ util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
                   {key = "gpu_ms", title = "GPU ms", fmt = "%.0f"},
                   {key = "ms_per_frame", title = "ms/frame", fmt = "%.1f"},
                   {key = "relmse", title = "relMSE", fmt = "%.5f"},
+                  {key = "relmse_se", title = "(std. err.)", fmt = "%.5f"},
                   {key = "relmse_trim", title = "relMSE trim", fmt = "%.5f"},
                   {key = "mape", title = "MAPE", fmt = "%.4f"},
                   {key = "ratio", title = configs[1].name .. "/this relMSE", fmt = "%.2f"},
@@ -326,6 +332,6 @@ loom.write_csv(out .. "/restir_equal_time.csv", rows,
                            "frames", "spp", "relmse", "relmse_trim", "mape"}})
 loom.write_csv(out .. "/summary.csv", summary,
                {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
-                           "ms_per_frame", "relmse", "relmse_trim", "mape", "ratio",
+                           "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mape", "ratio",
                            "ratio_trim", "rays_per_frame", "spp_equal_rays", "ratio_rays"}})
 print(string.format("\nwrote %s/restir_equal_time.csv, %s/summary.csv and plots", out, out))
