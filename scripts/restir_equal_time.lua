@@ -28,7 +28,9 @@
 -- Metrics: relMSE and MAPE (loom.metrics, eps 0.01) and relMSE without the worst `trim`
 -- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
 -- Still/moving rows also give the standard error of relMSE over the repeats (fireflies make it
--- large: same-estimator rows can differ 3x at 8 repeats), the rays traced per frame (every pass's `rays` stat) and the
+-- large: same-estimator rows can differ 3x at 8 repeats), the ratio at equal time with the
+-- first configuration's relMSE scaled by frame time (spp_param is an integer: its frame time
+-- can miss the target by a fraction of a sample), the rays traced per frame (every pass's `rays` stat) and the
 -- ratio at equal rays: the first configuration's relMSE scaled to the samples per pixel this
 -- one's rays would buy (relMSE ~ 1/spp), a proxy for GPU time where BVH traversal dominates.
 --
@@ -299,6 +301,11 @@ for _, row in ipairs(summary) do
       -- Equal rays (a proxy for GPU time where traversal dominates): the base's relMSE scaled
       -- to as many samples per pixel as this configuration's rays per frame buy, assuming
       -- relMSE ~ 1 / spp for independent samples.
+      -- Equal time without the rounding of spp_param: the base's relMSE scaled by its frame time
+      -- over this one's (relMSE ~ 1 / time for independent samples).
+      if base.spp and row.ms_per_frame and base.ms_per_frame then
+        row.ratio_time = base.relmse * base.ms_per_frame / row.ms_per_frame / row.relmse
+      end
       if base.spp and row.rays_per_frame and base.rays_per_frame and base.rays_per_frame > 0 then
         local spp_equal_rays = row.rays_per_frame / (base.rays_per_frame / base.spp)
         row.spp_equal_rays = spp_equal_rays
@@ -320,6 +327,7 @@ util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
                   {key = "mape", title = "MAPE", fmt = "%.4f"},
                   {key = "ratio", title = configs[1].name .. "/this relMSE", fmt = "%.2f"},
                   {key = "ratio_trim", title = "(trim)", fmt = "%.2f"},
+                  {key = "ratio_time", title = "at equal time (scaled)", fmt = "%.2f"},
                   {key = "rays_per_frame", title = "rays/frame", fmt = "%.0f"},
                   {key = "ratio_rays", title = "at equal rays", fmt = "%.2f"}},
                  summary)
@@ -333,5 +341,6 @@ loom.write_csv(out .. "/restir_equal_time.csv", rows,
 loom.write_csv(out .. "/summary.csv", summary,
                {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
                            "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mape", "ratio",
-                           "ratio_trim", "rays_per_frame", "spp_equal_rays", "ratio_rays"}})
+                           "ratio_trim", "ratio_time", "rays_per_frame", "spp_equal_rays",
+                           "ratio_rays"}})
 print(string.format("\nwrote %s/restir_equal_time.csv, %s/summary.csv and plots", out, out))
