@@ -416,56 +416,63 @@ CameraPoseGpu poseAt(const Camera& base, float time, uint32_t width, uint32_t he
 
 void SceneGpu::updateShapes(float time, bool firstFrame) {
     auto& g = *mImpl;
-    if (g.moving.empty()) return;   // static scene: nothing to do, ever
-    std::vector<VertexGpu> before;  // the previous frame's vertices, once a shape moves
-    for (MovingShape& m : g.moving) {
-        const Shape& shape = mScene.shapes[m.shape];
-        glm::mat4 now = shapeToWorldAt(shape, time);
-        m.prev = firstFrame ? now : m.now;
-        if (now != m.now) {
-            if (before.empty()) before = g.cpuVertices;
-            const Mesh& mesh = mScene.meshes[shape.mesh];
-            transformVertices(mesh, now, g.cpuVertices.data() + m.firstVertex,
-                              g.cpuPositions.data() + m.firstVertex);
-            mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex,
-                              mesh.positions.size() * sizeof(VertexGpu),
-                              m.firstVertex * sizeof(VertexGpu));
-        }
-        m.now = now;
-        auto rows = motionRows(m.prev, m.now);
-        std::copy(rows.begin(), rows.end(), g.shapeMotionRows.begin() + long(3 * m.shape));
+    if (g.moving.empty()) return;  // static scene: nothing to do, ever
+    std::vector<glm::mat4> now(g.moving.size());
+    bool moved = false;
+    for (size_t i = 0; i < g.moving.size(); ++i) {
+        now[i] = shapeToWorldAt(mScene.shapes[g.moving[i].shape], time);
+        moved = moved || now[i] != g.moving[i].now;
     }
-    mGpu.uploadBuffer(*g.shapeMotion, g.shapeMotionRows.data(),
-                      g.shapeMotionRows.size() * sizeof(glm::vec4));
     g.shapeTime = time;
-    if (before.empty()) {
-        g.infoData.previousGeometry = glm::uvec4(0u);  // the previous frame's geometry is this one
+    if (!moved) {  // nothing moved since the last frame time: it is also the previous frame
+        settleShapes();
         return;
     }
-    // Rigid motion changes the tree's boxes: rebuild it (milliseconds for the project scenes;
-    // a two-level BVH would spare the static part of large scenes). The previous frame's
-    // vertices and tree stay behind this frame's.
+    // The previous frame's vertices stay behind this frame's: only moving shapes differ there.
     const size_t vertexCount = g.cpuVertices.size();
-    mGpu.uploadBuffer(*g.vertices, before.data(), vertexCount * sizeof(VertexGpu),
-                      vertexCount * sizeof(VertexGpu));
+    for (size_t i = 0; i < g.moving.size(); ++i) {
+        MovingShape& m = g.moving[i];
+        const Mesh& mesh = mScene.meshes[mScene.shapes[m.shape].mesh];
+        const size_t bytes = mesh.positions.size() * sizeof(VertexGpu);
+        mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
+                          (vertexCount + m.firstVertex) * sizeof(VertexGpu));
+        m.prev = firstFrame ? now[i] : m.now;
+        if (now[i] != m.now) {
+            transformVertices(mesh, now[i], g.cpuVertices.data() + m.firstVertex,
+                              g.cpuPositions.data() + m.firstVertex);
+            mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
+                              m.firstVertex * sizeof(VertexGpu));
+        }
+        m.now = now[i];
+    }
+    uploadMotionRows();
+    // Rigid motion changes the tree's boxes: rebuild it (milliseconds for the project scenes;
+    // a two-level BVH would spare the static part of large scenes), the last tree behind it.
     BvhBuild build = buildBvh(g.cpuPositions, g.cpuIndices, g.cpuMasks);
     g.bvh.upload(mGpu, build, &g.lastBuild);
-    g.infoData.previousGeometry =
-        glm::uvec4(uint32_t(vertexCount), g.bvh.previousNodeBase, g.bvh.previousTriangleBase, 0u);
+    g.infoData.previousGeometry = firstFrame
+                                      ? glm::uvec4(0u)
+                                      : glm::uvec4(uint32_t(vertexCount), g.bvh.previousNodeBase,
+                                                   g.bvh.previousTriangleBase, 0u);
     g.lastBuild = std::move(build);
     mStats.bvhNodes = g.lastBuild.stats.nodes;
 }
 
-void SceneGpu::settleShapes() {
+void SceneGpu::uploadMotionRows() {
     auto& g = *mImpl;
-    for (MovingShape& m : g.moving) {
-        m.prev = m.now;
+    for (const MovingShape& m : g.moving) {
         auto rows = motionRows(m.prev, m.now);
         std::copy(rows.begin(), rows.end(), g.shapeMotionRows.begin() + long(3 * m.shape));
     }
     if (!g.moving.empty())
         mGpu.uploadBuffer(*g.shapeMotion, g.shapeMotionRows.data(),
                           g.shapeMotionRows.size() * sizeof(glm::vec4));
+}
+
+void SceneGpu::settleShapes() {
+    auto& g = *mImpl;
+    for (MovingShape& m : g.moving) m.prev = m.now;
+    uploadMotionRows();
     g.infoData.previousGeometry = glm::uvec4(0u);
 }
 

@@ -45,6 +45,8 @@ private:
     void updateShapes(float time, bool firstFrame);
     // The previous frame becomes this one: identity motion maps, no previous geometry.
     void settleShapes();
+    // Per moving shape, the map from this frame's positions to the previous frame's.
+    void uploadMotionRows();
 
     struct Impl;
     std::unique_ptr<Impl> mImpl;

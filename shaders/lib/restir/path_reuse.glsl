@@ -29,18 +29,8 @@ bool restir_similar(PrimaryHit a, PrimaryHit b, bool b_previous, float normal_th
 PrimaryHit restir_domain_primary(RestirSettings cfg, PathSample s, PrimaryHit pixel_hit,
                                  ivec2 pixel, CameraPose pose) {
     if (cfg.area == 0u) return pixel_hit;
-    CameraFrame cam = camera_frame(pose, pose, 0.0);
-    vec3 o, d;
-    camera_ray(cam, (vec2(pixel) + s.film_lens.xy) / vec2(cfg.frame_size), s.film_lens.zw, o, d);
-    PrimaryHit ph;
-    ph.camera = vec4(o, 1.0);
-    Hit hit;
     atomicAdd(shift_rays, 1u);
-    if (trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit))
-        ph.hit = uvec4(hit.prim, floatBitsToUint(hit.bary), 0u);
-    else
-        ph.hit = uvec4(~0u, floatBitsToUint(d));
-    return ph;
+    return restir_trace_primary(pose, pixel, s.film_lens, cfg.frame_size);
 }
 
 // Area ReSTIR shift mappings of the primary vertex under a thin lens (bit masks, dofShift).
@@ -86,10 +76,13 @@ bool restir_primary_reconnect(PathSample s, PrimaryHit src, vec2 src_film, Camer
     CameraFrame cx = camera_frame(src_pose, src_pose, 0.0);
     CameraFrame cy = camera_frame(dst_pose, dst_pose, 0.0);
     if (cy.aperture <= 0.0 || cx.aperture <= 0.0) return false;
-    scene_select_frame(src_previous);
-    SurfacePoint x1_src = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
-    scene_select_frame(dst_previous);
     SurfacePoint x1 = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
+    SurfacePoint x1_src = x1;
+    if (src_previous != dst_previous) {
+        scene_select_frame(src_previous);
+        x1_src = surface_point(src.hit.x, uintBitsToFloat(src.hit.yz));
+        scene_select_frame(dst_previous);
+    }
     vec3 Px = camera_focal_point(cx, src_film / vec2(frame_size));
     vec3 Py = camera_focal_point(cy, dst_film / vec2(frame_size));
     // Line Py -> x1 meets the lens plane (camera z = 0).

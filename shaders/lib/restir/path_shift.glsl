@@ -78,6 +78,22 @@ void restir_vertex_randoms(uvec4 seed, uint j, out vec3 u_light, out vec3 u_bsdf
     u_bsdf = vec3(rng_next(r), rng_next2(r));
 }
 
+// The primary hit of the camera ray through film position (pixel + film_lens.xy) with lens
+// sample film_lens.zw, seen by camera `pose` (Area ReSTIR samples carry these; the ray is traced
+// again in every domain). A miss keeps the ray direction.
+PrimaryHit restir_trace_primary(CameraPose pose, ivec2 pixel, vec4 film_lens, uvec2 frame_size) {
+    CameraFrame cam = camera_frame(pose, pose, 0.0);
+    vec3 o, d;
+    camera_ray(cam, (vec2(pixel) + film_lens.xy) / vec2(frame_size), film_lens.zw, o, d);
+    PrimaryHit ph;
+    ph.camera = vec4(o, 1.0);
+    Hit hit;
+    ph.hit = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit)
+                 ? uvec4(hit.prim, floatBitsToUint(hit.bary), 0u)
+                 : uvec4(~0u, floatBitsToUint(d));
+    return ph;
+}
+
 ShadingPoint restir_primary_shading(PrimaryHit ph) {
     Hit h;
     h.t = 0.0;

@@ -74,12 +74,7 @@ void main() {
             PrimaryHit cph = ph;
             if (pc.area != 0u) {
                 film_lens = vec4(rng_next2(rng_film), rng_next2(rng_film));
-                camera_ray(cam, (vec2(pixel) + film_lens.xy) / vec2(pc.frameSize), film_lens.zw, o, d);
-                cph.camera = vec4(o, 1.0);
-                Hit hit;
-                cph.hit = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit)
-                              ? uvec4(hit.prim, floatBitsToUint(hit.bary), 0u)
-                              : uvec4(~0u, floatBitsToUint(d));
+                cph = restir_trace_primary(scene_info.camera_open, ivec2(pixel), film_lens, pc.frameSize);
                 ++rays;
             }
             rays += restir_generate(cfg, cph, seed, film_lens, inv, pc.rrDepth, r, rng_sel);
