@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
-  glslang-dev
+  glslang-dev glslang-tools
   nlohmann-json3-dev libfmt-dev libglm-dev
   libopenimageio-dev openimageio-tools
   libembree-dev
