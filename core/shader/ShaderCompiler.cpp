@@ -6,6 +6,7 @@
 #include <glslang/build_info.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <unistd.h>
@@ -180,7 +181,26 @@ std::string shaderCompilerVersion() {
 }
 
 ShaderCompiler::ShaderCompiler(std::vector<std::string> searchPaths, std::string cacheDir)
-    : mSearchPaths(std::move(searchPaths)), mCacheDir(std::move(cacheDir)) {}
+    : mSearchPaths(std::move(searchPaths)), mCacheDir(std::move(cacheDir)) {
+    if (const char* env = std::getenv("LOOM_SHADER_DEFINES")) mGlobalDefines = parseShaderDefines(env);
+}
+
+ShaderDefines parseShaderDefines(const std::string& text) {
+    ShaderDefines out;
+    std::stringstream ss(text);
+    std::string item;
+    while (std::getline(ss, item, ';')) {
+        if (item.find_first_not_of(" \t") == std::string::npos) continue;
+        auto eq = item.find('=');
+        std::string name = item.substr(0, eq), value = eq == std::string::npos ? "1" : item.substr(eq + 1);
+        static const std::regex ident(R"(\s*([A-Za-z_][A-Za-z0-9_]*)\s*)");
+        std::smatch m;
+        if (!std::regex_match(name, m, ident))
+            throw UserError("LOOM_SHADER_DEFINES: '" + item + "' is not NAME or NAME=VALUE");
+        out[m[1]] = value;
+    }
+    return out;
+}
 
 void ShaderCompiler::addSearchPath(const std::string& dir) {
     std::lock_guard lock(mMutex);
@@ -236,8 +256,11 @@ std::string ShaderCompiler::cacheKey(const std::string& resolvedPath, const Shad
 }
 
 std::shared_ptr<const CompiledShader> ShaderCompiler::compile(const std::string& pathIn,
-                                                              const ShaderDefines& defines) {
+                                                              const ShaderDefines& localDefines) {
     std::string path = resolve(pathIn);
+    // Global defines (LOOM_SHADER_DEFINES) under the shader's own: part of every key.
+    ShaderDefines defines = mGlobalDefines;
+    for (const auto& [k, v] : localDefines) defines[k] = v;
     std::string mkey = memoryKey(path, defines);
     {
         std::lock_guard lock(mMutex);

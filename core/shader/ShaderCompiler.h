@@ -41,6 +41,12 @@ public:
     // Finds a shader: absolute, relative to fromDir, then each search path. Throws UserError.
     std::string resolve(const std::string& path, const std::string& fromDir = "") const;
 
+    // Defines added to every compile, under each shader's own (which win). The constructor
+    // takes them from $LOOM_SHADER_DEFINES ("NAME=VALUE;NAME2"), so a test or a user can put a
+    // deliberate change (e.g. a bias) into every kernel without editing a pass.
+    void setGlobalDefines(ShaderDefines defines) { mGlobalDefines = std::move(defines); }
+    const ShaderDefines& globalDefines() const { return mGlobalDefines; }
+
     // Compiles (or loads from the in-memory / disk cache). Throws ShaderCompileError.
     std::shared_ptr<const CompiledShader> compile(const std::string& path,
                                                   const ShaderDefines& defines = {});
@@ -61,11 +67,15 @@ public:
 private:
     std::vector<std::string> mSearchPaths;
     std::string mCacheDir;
+    ShaderDefines mGlobalDefines;
     std::map<std::string, std::shared_ptr<const CompiledShader>> mMemory;  // by path+defines
     uint64_t mGeneration = 0;
     Stats mStats;
     mutable std::mutex mMutex;
 };
+
+// "NAME=VALUE;NAME2;..." (a bare NAME is NAME=1). Throws UserError naming a malformed item.
+ShaderDefines parseShaderDefines(const std::string& text);
 
 // Source-level version of this compiler front end, part of every cache key.
 std::string shaderCompilerVersion();

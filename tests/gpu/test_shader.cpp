@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -129,6 +130,24 @@ TEST_F(ShaderTest, DefinesProduceDifferentSpirv) {
     EXPECT_EQ(c.compile(main, {{"SCALE", "1.25"}}).get(), a.get());
     EXPECT_EQ(c.stats().compiles, 2u);
     EXPECT_EQ(c.stats().memoryHits, 1u);
+}
+
+// Global defines ($LOOM_SHADER_DEFINES) reach every compile, under the shader's own, and are
+// part of the cache key (a test that injects a bias never reuses unbiased SPIR-V).
+TEST_F(ShaderTest, GlobalDefinesFromEnvironment) {
+    std::string main = file("main.comp", storeKernel("#define VALUE() (SCALE * OFFSET)"));
+    ::setenv("LOOM_SHADER_DEFINES", "SCALE=3.0; OFFSET=2.0", 1);
+    ShaderCompiler c({}, cacheDir());
+    ::unsetenv("LOOM_SHADER_DEFINES");
+    EXPECT_EQ(c.globalDefines().size(), 2u);
+    EXPECT_EQ(run(*c.compile(main)), 6.0f);
+    EXPECT_EQ(run(*c.compile(main, {{"SCALE", "0.5"}})), 1.0f);  // the shader's own wins
+    ShaderCompiler plain({}, cacheDir());
+    auto p = plain.compile(main, {{"SCALE", "1.0"}, {"OFFSET", "1.0"}});
+    EXPECT_FALSE(p->fromDiskCache);
+    EXPECT_EQ(run(*p), 1.0f);
+    EXPECT_EQ(loom::parseShaderDefines("A;B=2")["A"], "1");
+    EXPECT_THROW(loom::parseShaderDefines("1X=2"), loom::UserError);
 }
 
 TEST_F(ShaderTest, DiskCacheHitOnSecondCompiler) {
