@@ -11,6 +11,7 @@
 struct LightSample {
     vec3 wi;        // unit direction from the shading point to the light
     float dist;     // distance to the sampled point (1e30 for infinite lights)
+    vec3 n;         // geometric normal at the sampled point (0 for point and infinite lights)
     vec3 Li;        // radiance (area/env) or intensity/dist^2 (point/spot/directional)
     float pdf;      // solid angle pdf incl. selection; 0 = failed
     bool is_delta;  // point, spot or directional light (no MIS with BSDF sampling)
@@ -101,6 +102,8 @@ LightSample sample_light(vec3 p, vec3 u) {
     ls.dist = 1e30;
     ls.Li = vec3(0.0);
     ls.wi = vec3(0, 0, 1);
+    ls.n = vec3(0.0);
+    ls.light = 0u;
     if (light_count() == 0u) return ls;
     uint li = select_light(u.z);
     ls.light = li;
@@ -136,6 +139,7 @@ LightSample sample_light(vec3 p, vec3 u) {
             ls.pdf = l.pmf * ls.dist * ls.dist / (cos_l * area);
         }
         SurfacePoint sp = surface_point(l.index, vec2(0.0));
+        ls.n = sp.ng;
         ls.Li = emitted_radiance(sp.shape, sp.ng, ls.wi);
     } else if (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) {
         ls.Li = point_light_incident(l, p, ls.wi, ls.dist);
@@ -156,6 +160,11 @@ LightSample sample_light(vec3 p, vec3 u) {
         ls.Li = l.p1.x * envmap_eval(l.index, ls.wi);
         ls.pdf = l.pmf * pdf;
     }
+#ifdef LOOM_TEST_LIGHT_PDF_SCALE
+    // Test-only: a deliberately wrong light-sampling density, so the strategy-agreement tests
+    // can show that they detect a real bias in the estimator (tests/gpu/test_path_tracer.cpp).
+    ls.pdf *= float(LOOM_TEST_LIGHT_PDF_SCALE);
+#endif
     return ls;
 }
 

@@ -73,4 +73,36 @@ vec3 offset_ray_origin(vec3 p, vec3 ng, vec3 dir) {
     return p + (dot(ng, dir) >= 0.0 ? eps : -eps) * ng;
 }
 
+// A visibility ray: hits with t in (0, tmax] along d from o mean "occluded".
+struct ShadowRay {
+    vec3 o;
+    vec3 d;
+    float tmax;
+};
+
+// The segment between p and q with both ends moved off their surfaces (pbrt-v4's SpawnRayTo
+// from both sides); ng or nq = 0 marks a point on no surface (a lens, a point light), which
+// stays put. Offsetting only the near end is not enough: its offset shortens the distance to
+// q's plane by up to eps / cos, and once that exceeds the relative shadow epsilon (q nearer
+// than about eps / 1e-4) q's own triangle occludes it. That was the path tracer's NEE bias
+// (4-6% dark), which hit points within ~1 unit of a light, such as the Cornell box's tall block top.
+ShadowRay shadow_ray_between(vec3 p, vec3 ng, vec3 q, vec3 nq) {
+    ShadowRay r;
+    r.o = offset_ray_origin(p, ng, q - p);
+    vec3 v = offset_ray_origin(q, nq, p - q) - r.o;
+    float len = length(v);
+    r.d = len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0);
+    r.tmax = len * (1.0 - 1e-4);
+    return r;
+}
+
+// Towards a light at infinity (environment, directional).
+ShadowRay shadow_ray_infinite(vec3 p, vec3 ng, vec3 dir) {
+    ShadowRay r;
+    r.o = offset_ray_origin(p, ng, dir);
+    r.d = dir;
+    r.tmax = 1e30;
+    return r;
+}
+
 #endif

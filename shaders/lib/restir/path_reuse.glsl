@@ -96,10 +96,9 @@ bool restir_primary_reconnect(PathSample s, PrimaryHit src, vec2 src_film, Camer
     s_dst.film_lens.zw = disk_concentric_inverse(lens);
     vec3 Ly = cy.origin + Lc.x * cy.right_axis + Lc.y * cy.up_axis;
     // The new primary segment must be unoccluded.
-    vec3 v = x1.p - Ly;
-    float dist = length(v);
+    ShadowRay primary = shadow_ray_between(Ly, vec3(0.0), x1.p, x1.ng);
     atomicAdd(shift_rays, 1u);
-    if (trace_any(Ly, v / dist, 0.0, dist * (1.0 - 1e-3), BVH_MASK_ALL)) return false;
+    if (trace_any(primary.o, primary.d, 0.0, primary.tmax, BVH_MASK_ALL)) return false;
     vec3 Lx = src.camera.xyz;
     J = projection_area_ratio(Px, Lx, cx.forward, x1_src.p, x1_src.ng) *
         projection_area_ratio(Py, x1.p, x1.ng, Ly, cy.forward);

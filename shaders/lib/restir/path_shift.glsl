@@ -18,12 +18,9 @@
 #ifndef LOOM_RESTIR_PATH_SHIFT_GLSL
 #define LOOM_RESTIR_PATH_SHIFT_GLSL
 
-#include "lib/bsdf.glsl"
 #include "lib/color.glsl"
-#include "lib/lights.glsl"
-#include "lib/mis.glsl"
+#include "lib/integrator/nee.glsl"
 #include "lib/restir/path_reservoir.glsl"
-#include "lib/shading.glsl"
 
 // Shift statistics (attempts / successes by kind), read back by the passes for Lua/inspector.
 layout(std430) buffer RestirCounters {
@@ -113,19 +110,6 @@ vec2 triangle_barycentrics(uint prim, vec3 p) {
     return vec2(d22 * dv1 - d12 * dv2, d11 * dv2 - d12 * dv1) / det;
 }
 
-// The shadow ray from p (geometric normal ng) along dir over dist (>= 1e29: unbounded).
-void restir_visibility_ray(vec3 p, vec3 ng, vec3 dir, float dist, out vec3 o, out float tmax) {
-    o = offset_ray_origin(p, ng, dir);
-    tmax = dist < 1e29 ? dist * (1.0 - 1e-4) : 1e30;
-}
-
-bool restir_visible(vec3 p, vec3 ng, vec3 dir, float dist) {
-    vec3 o;
-    float tmax;
-    restir_visibility_ray(p, ng, dir, dist, o, tmax);
-    return !trace_any(o, dir, 0.0, tmax, BVH_MASK_ALL);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Candidate generation: trace one path from the primary hit, streaming every NEE sample and every
 // emitter hit into r with resampling weight luminance(contribution) * inv_candidates (RIS with
@@ -193,15 +177,14 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
 
         // NEE candidate: the path x1 .. xj, light (n = j + 1).
         if ((flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u) {
-            LightSample ls = sample_light(sh.sp.p, u_light);
-            if (ls.pdf > 0.0 && any(greaterThan(ls.Li, vec3(0.0)))) {
-                vec3 wi = shading_to_local(sh, ls.wi);
-                vec3 f = bsdf_eval(sh.mat, wo, wi);
+            NeeSample nee = nee_sample(sh, wo, u_light, true, cfg.mis_heuristic);
+            LightSample ls = nee.ls;
+            if (nee.valid) {
+                vec3 f = nee.f;
+                float w = nee.mis;
                 ++rays;
-                if (any(greaterThan(f, vec3(0.0))) && restir_visible(sh.sp.p, sh.sp.ng, ls.wi, ls.dist)) {
-                    float bpdf = bsdf_pdf(sh.mat, wo, wi);
-                    float w = ls.is_delta ? 1.0 : mis_weight(ls.pdf, bpdf, cfg.mis_heuristic);
-                    vec3 C = beta * f * ls.Li * (w / ls.pdf);
+                if (!trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) {
+                    vec3 C = beta * nee.value;
                     LightGpu l = scene_lights[ls.light];
                     uint kind = l.type == LIGHT_TRIANGLE ? RC_SURFACE
                               : (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) ? RC_POINT : RC_DIRECTION;
@@ -343,7 +326,7 @@ struct Reconnection {
 };
 
 bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, vec3 d,
-                            out Reconnection rc, out vec3 ray_o, out float ray_tmax) {
+                            out Reconnection rc, out ShadowRay ray) {
     uint n = path_length(s), k = path_rc_index(s);
     vec3 wo = shading_to_local(sy, -d);
     uint kind = path_rc_kind(s);
@@ -371,7 +354,7 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
         } else {
             rc.G_Le = vec3(G);
         }
-        dist *= 1.0 - 1e-3;
+        ray = shadow_ray_between(sy.sp.p, sy.sp.ng, rc.sk.sp.p, rc.sk.sp.ng);
     } else if (kind == RC_DIRECTION) {
         rc.dir = s.rc_dir;
         dist = 1e30;
@@ -382,16 +365,17 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
             rc.G_Le = environment_radiance(rc.dir);
             rc.light_pdf = light_pdf_environment(rc.dir);
         }
+        ray = shadow_ray_infinite(sy.sp.p, sy.sp.ng, rc.dir);
     } else {
         LightGpu l = scene_lights[s.rc_id];
         rc.G_Le = point_light_incident(l, sy.sp.p, rc.dir, dist);
         if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return false;
+        ray = shadow_ray_between(sy.sp.p, sy.sp.ng, l.p0.xyz, vec3(0.0));
     }
     vec3 wi = shading_to_local(sy, rc.dir);
     rc.f = bsdf_eval(sy.mat, wo, wi);
     if (all(equal(rc.f, vec3(0.0))) || all(equal(rc.G_Le, vec3(0.0)))) return false;
     rc.bsdf_pdf = k == n ? bsdf_pdf(sy.mat, wo, wi) : 0.0;
-    restir_visibility_ray(sy.sp.p, sy.sp.ng, rc.dir, dist, ray_o, ray_tmax);
     return true;
 }
 
@@ -441,22 +425,18 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
         vec3 ray_o, ray_d;
         float ray_tmax = 1e30;
         Reconnection rc;
-        LightSample ls;
+        NeeSample nee;
         BsdfSample bs;
-        vec3 f_nee;
+        ShadowRay shadow;
         if (step == SHIFT_STEP_RECONNECT) {
             if (!restir_reconnectable(cfg, k, rough_j, true, 1e30)) break;
-            if (!restir_reconnect_begin(cfg, s, sh, d, rc, ray_o, ray_tmax)) break;
-            ray_d = rc.dir;
+            if (!restir_reconnect_begin(cfg, s, sh, d, rc, shadow)) break;
         } else if (step == SHIFT_STEP_LAST_NEE) {
             if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
-            ls = sample_light(sh.sp.p, u_light);
-            if (!(ls.pdf > 0.0)) break;
-            if (restir_reconnectable(cfg, n, rough_j, true, ls.dist)) break;  // not invertible
-            f_nee = bsdf_eval(sh.mat, wo, shading_to_local(sh, ls.wi));
-            if (all(equal(f_nee, vec3(0.0))) || all(equal(ls.Li, vec3(0.0)))) break;
-            restir_visibility_ray(sh.sp.p, sh.sp.ng, ls.wi, ls.dist, ray_o, ray_tmax);
-            ray_d = ls.wi;
+            nee = nee_sample(sh, wo, u_light, true, cfg.mis_heuristic);
+            if (!nee.valid) break;
+            if (restir_reconnectable(cfg, n, rough_j, true, nee.ls.dist)) break;  // not invertible
+            shadow = nee.ray;
         } else {
             // Replay the BSDF sample of x_j towards y_{j+1}.
             bs = bsdf_sample(sh.mat, wo, u_bsdf);
@@ -465,6 +445,11 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
             ray_o = offset_ray_origin(sh.sp.p, sh.sp.ng, ray_d);
         }
         bool any_hit = step == SHIFT_STEP_RECONNECT || step == SHIFT_STEP_LAST_NEE;
+        if (any_hit) {
+            ray_o = shadow.o;
+            ray_d = shadow.d;
+            ray_tmax = shadow.tmax;
+        }
         ++rays;
         Hit hit;
         bool found = bvh_traverse(ray_o, ray_d, 0.0, ray_tmax, BVH_MASK_ALL, any_hit, hit);
@@ -473,10 +458,7 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
             if (step == SHIFT_STEP_RECONNECT) {
                 result = restir_reconnect_end(cfg, s, rc, beta);
             } else {
-                vec3 wi = shading_to_local(sh, ls.wi);
-                float w = ls.is_delta ? 1.0
-                                      : mis_weight(ls.pdf, bsdf_pdf(sh.mat, wo, wi), cfg.mis_heuristic);
-                result = beta * f_nee * ls.Li * (w / ls.pdf);
+                result = beta * nee.value;
             }
             break;
         }

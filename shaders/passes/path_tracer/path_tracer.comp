@@ -2,12 +2,9 @@
 // Reference unidirectional path tracer: BSDF sampling and next-event estimation combined by
 // MIS (Veach 1997), Russian roulette, thin lens, motion blur over the shutter. The baseline
 // every other estimator is tested against, so each strategy can be switched off.
-#include "lib/bsdf.glsl"
 #include "lib/camera.glsl"
-#include "lib/lights.glsl"
-#include "lib/mis.glsl"
+#include "lib/integrator/nee.glsl"
 #include "lib/rng.glsl"
-#include "lib/shading.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f) uniform writeonly image2D colorImage;
@@ -103,7 +100,7 @@ void main() {
                 if (any(greaterThan(Le, vec3(0.0)))) {
                     float w = 1.0;
                     if (!prev_delta && pc.strategy == STRATEGY_MIS)
-                        w = mis_weight(prev_pdf, light_pdf_environment(d), pc.misHeuristic);
+                        w = mis_weight_environment_hit(prev_pdf, d, pc.misHeuristic);
                     else if (!prev_delta && pc.strategy == STRATEGY_NEE)
                         w = 0.0;
                     vec3 c = beta * Le * w;
@@ -122,8 +119,8 @@ void main() {
                 vec3 Le = emitted_radiance(sh.sp.shape, sh.sp.ng, d);
                 float w = 1.0;
                 if (!prev_delta && pc.strategy == STRATEGY_MIS)
-                    w = mis_weight(prev_pdf, light_pdf_triangle(prev_p, hit.prim, sh.sp.p, sh.sp.ng),
-                                   pc.misHeuristic);
+                    w = mis_weight_emitter_hit(prev_pdf, prev_p, hit.prim, sh.sp.p, sh.sp.ng,
+                                               pc.misHeuristic);
                 else if (!prev_delta && pc.strategy == STRATEGY_NEE)
                     w = 0.0;
                 vec3 c = beta * Le * w;
@@ -139,22 +136,13 @@ void main() {
             // Next-event estimation.
             vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
             if (has_smooth && pc.strategy != STRATEGY_BSDF) {
-                LightSample ls = sample_light(sh.sp.p, u_light);
-                if (ls.pdf > 0.0 && any(greaterThan(ls.Li, vec3(0.0)))) {
-                    vec3 wi = shading_to_local(sh, ls.wi);
-                    vec3 f = bsdf_eval(sh.mat, wo, wi);
-                    if (any(greaterThan(f, vec3(0.0)))) {
-                        vec3 so = offset_ray_origin(sh.sp.p, sh.sp.ng, ls.wi);
-                        float tmax = ls.dist < 1e29 ? ls.dist * (1.0 - 1e-4) : 1e30;
-                        ++rays;
-                        if (!trace_any(so, ls.wi, 0.0, tmax, BVH_MASK_ALL)) {
-                            float w = 1.0;
-                            if (!ls.is_delta && pc.strategy == STRATEGY_MIS)
-                                w = mis_weight(ls.pdf, bsdf_pdf(sh.mat, wo, wi), pc.misHeuristic);
-                            vec3 c = beta * f * ls.Li * (w / ls.pdf);
-                            L += c;
-                            if (depth == 0u) L_direct += c;
-                        }
+                NeeSample nee = nee_sample(sh, wo, u_light, pc.strategy == STRATEGY_MIS, pc.misHeuristic);
+                if (nee.valid) {
+                    ++rays;
+                    if (!trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) {
+                        vec3 c = beta * nee.value;
+                        L += c;
+                        if (depth == 0u) L_direct += c;
                     }
                 }
             }
