@@ -3,8 +3,11 @@
 #include <fmt/format.h>
 
 #include "core/gpu/CounterBuffer.h"
+#include <algorithm>
+
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
+#include "core/util/Log.h"
 
 namespace loom {
 
@@ -54,26 +57,51 @@ public:
                                   {"vbuffer", "vbufferImage"},
                                   {"sample", "sampleImage"}})
             if (ctx.has(port)) b.set(glsl, ctx.texture(port));
-        gpu::PushConstants pc(*pipeline);
         uint32_t size[2] = {ctx.width(), ctx.height()};
         std::string strategy = param<std::string>("strategy");
-        pc.setUints("frameSize", size, 2)
-            .set("frameIndex", uint32_t(ctx.frameIndex()))
-            .set("seed", ctx.seed())
-            .set("spp", uint32_t(param<int>("samplesPerPixel")))
-            .set("maxBounces", uint32_t(param<int>("maxBounces")))
-            .set("rrDepth", uint32_t(param<int>("rrDepth")))
-            .set("strategy", uint32_t(strategy == "mis" ? 0 : strategy == "bsdf" ? 1 : 2))
-            .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
-            .set("motionBlur", uint32_t(param<bool>("motionBlur")))
-            .set("clampValue", float(param<double>("clamp")));
-        ctx.cmd().dispatchThreads(*pipeline, b, &pc, ctx.width(), ctx.height());
+        uint32_t spp = uint32_t(param<int>("samplesPerPixel"));
+        uint32_t maxBounces = uint32_t(param<int>("maxBounces"));
+        // lavapipe stops a loop after 65535 iterations per invocation (bvh.glsl): split the
+        // frame's samples so that a dispatch stays far below that, at 2 rays per bounce and up
+        // to kStepsPerRay traversal steps per ray; frameCompleted checks what actually ran.
+        constexpr uint32_t kStepsPerRay = 64, kStepBudget = 32768;
+        uint32_t perDispatch = std::max(1u, kStepBudget / (2 * (maxBounces + 1) * kStepsPerRay));
+        for (uint32_t base = 0; base < spp; base += perDispatch) {
+            gpu::PushConstants pc(*pipeline);
+            pc.setUints("frameSize", size, 2)
+                .set("frameIndex", uint32_t(ctx.frameIndex()))
+                .set("seed", ctx.seed())
+                .set("spp", std::min(perDispatch, spp - base))
+                .set("sampleBase", base)
+                .set("sppTotal", spp)
+                .set("maxBounces", maxBounces)
+                .set("rrDepth", uint32_t(param<int>("rrDepth")))
+                .set("strategy", uint32_t(strategy == "mis" ? 0 : strategy == "bsdf" ? 1 : 2))
+                .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
+                .set("motionBlur", uint32_t(param<bool>("motionBlur")))
+                .set("clampValue", float(param<double>("clamp")));
+            if (base > 0) ctx.cmd().barrier();
+            ctx.cmd().dispatchThreads(*pipeline, b, &pc, ctx.width(), ctx.height());
+        }
     }
-    void frameCompleted(gpu::Context& gpu) override { mRayCounter.read(gpu); }
-    std::map<std::string, double> stats() const override { return {{"rays", mRayCounter[0]}}; }
+    void frameCompleted(gpu::Context& gpu) override {
+        mRayCounter.read(gpu);
+        // A traversal that reached lavapipe's loop limit was cut short: the image is wrong.
+        if (mRayCounter[1] >= 65535u - 16u && !mWarnedLoopLimit) {
+            logWarning("PathTracer: an invocation ran {} BVH traversal steps in one dispatch, "
+                       "at lavapipe's loop limit (65535): some rays were cut short and the image "
+                       "is wrong; lower maxBounces or use a GPU device",
+                       mRayCounter[1]);
+            mWarnedLoopLimit = true;
+        }
+    }
+    std::map<std::string, double> stats() const override {
+        return {{"rays", mRayCounter[0]}, {"maxTraversalSteps", mRayCounter[1]}};
+    }
 
 private:
-    gpu::CounterBuffer<1> mRayCounter{"RayCounter"};
+    gpu::CounterBuffer<2> mRayCounter{"RayCounter"};
+    bool mWarnedLoopLimit = false;
 };
 
 LOOM_REGISTER_PASS(PathTracerPass, "PathTracer",

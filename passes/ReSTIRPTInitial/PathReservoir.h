@@ -40,11 +40,12 @@ public:
                 {"shiftAttemptsReplay", mCounters[2]},
                 {"shiftSuccessReplay", mCounters[3]},
                 {"reconnectShare", attempts > 0 ? mCounters[0] / attempts : 0.0},
-                {"rays", mCounters[4]}};
+                {"rays", mCounters[4]},
+                {"maxTraversalSteps", mCounters[5]}};
     }
 
 private:
-    gpu::CounterBuffer<5> mCounters{"RestirCounters"};
+    gpu::CounterBuffer<6> mCounters{"RestirCounters"};
 };
 
 }  // namespace loom::restir

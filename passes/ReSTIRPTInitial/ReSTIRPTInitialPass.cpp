@@ -72,11 +72,13 @@ public:
         ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mRayCounter.read(gpu); }
-    std::map<std::string, double> stats() const override { return {{"rays", mRayCounter[0]}}; }
+    std::map<std::string, double> stats() const override {
+        return {{"rays", mRayCounter[0]}, {"maxTraversalSteps", mRayCounter[1]}};
+    }
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
-    gpu::CounterBuffer<1> mRayCounter{"RayCounter"};
+    gpu::CounterBuffer<2> mRayCounter{"RayCounter"};
 };
 
 LOOM_REGISTER_PASS(

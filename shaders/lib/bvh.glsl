@@ -43,6 +43,14 @@ uint bvh_node_base = 0u, bvh_tri_base = 0u;
 // (kBvhMaxDepth). The top 8 entries live in registers, deeper ones spill to a local array.
 #define BVH_STACK_SIZE 32
 
+// Traversal steps (node and triangle loop iterations together, which bounds each loop's own
+// count) this invocation has run, over all its queries. lavapipe (llvmpipe) silently
+// stops any loop after 65535 iterations per invocation, summed over every entry into it
+// (tests/gpu/test_shader.cpp LoopIterationsPerInvocation), so kernels bound their work per
+// dispatch and report this count to catch a truncated traversal (a wrong image, no error).
+uint bvh_iterations = 0u;
+const uint BVH_LOOP_LIMIT = 65535u;
+
 #ifdef BVH_STATS
 #extension GL_KHR_shader_subgroup_arithmetic : require
 // Traversal statistics of the last query of this invocation (profiling only): nodes and
@@ -125,6 +133,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     bvh_stat_nodes = 0u, bvh_stat_tris = 0u, bvh_stat_tri_iters = 0u;
 #endif
     while (true) {
+        bvh_iterations++;
 #ifdef BVH_STATS
         bvh_stat_nodes++;
 #endif
@@ -177,6 +186,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         while (tri_hits != 0u) {
             uint k = uint(findLSB(tri_hits));
             tri_hits &= tri_hits - 1u;
+            bvh_iterations++;
 #ifdef BVH_STATS
             bvh_stat_tris++;
 #endif

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -148,6 +149,29 @@ TEST_F(ShaderTest, GlobalDefinesFromEnvironment) {
     EXPECT_EQ(run(*p), 1.0f);
     EXPECT_EQ(loom::parseShaderDefines("A;B=2")["A"], "1");
     EXPECT_THROW(loom::parseShaderDefines("1X=2"), loom::UserError);
+}
+
+// Mesa's llvmpipe (lavapipe) stops a loop after 65535 iterations per invocation, summed over
+// every entry into that loop, silently (LP_MAX_TGSI_LOOP_ITERATIONS): a kernel that loops
+// longer than that gives wrong results, not an error. Passes keep their per-dispatch loops
+// below it (PathTracer splits its samples into dispatches); this test records the limit.
+TEST_F(ShaderTest, LoopIterationsPerInvocation) {
+    std::string main = file("loops.comp", R"(#version 460
+layout(local_size_x = 1) in;
+layout(std430) buffer Out { float result[]; };
+layout(push_constant) uniform P { uint outer; uint inner; } pc;
+void main() {
+    uint n = 0u;
+    for (uint i = 0u; i < OUTER; ++i)
+        for (uint j = 0u; j < INNER; ++j) n++;
+    result[0] = float(n);
+}
+)");
+    ShaderCompiler c({}, "");
+    float small = run(*c.compile(main, {{"OUTER", "100u"}, {"INNER", "100u"}}));
+    EXPECT_EQ(small, 10000.0f);
+    float large = run(*c.compile(main, {{"OUTER", "400u"}, {"INNER", "400u"}}));
+    std::printf("nested loops of 400 x 400 iterations ran %.0f inner iterations\n", large);
 }
 
 TEST_F(ShaderTest, DiskCacheHitOnSecondCompiler) {

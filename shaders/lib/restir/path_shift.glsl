@@ -29,6 +29,7 @@ layout(std430) buffer RestirCounters {
     uint shift_attempts_replay;
     uint shift_success_replay;
     uint shift_rays;  // rays traced by shifts (and by the domain changes of path_reuse.glsl)
+    uint shift_max_bvh_iterations;  // most traversal steps of one invocation (bvh.glsl limit)
 };
 
 // Solid-angle Jacobian of reconnecting to x_k from a new predecessor (Lin et al. Eq. 17;
@@ -493,6 +494,7 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
         sh = sn;
     }
     atomicAdd(shift_rays, rays);
+    atomicMax(shift_max_bvh_iterations, bvh_iterations);
     bool ok = any(greaterThan(result, vec3(0.0))) && !any(isnan(result)) && !any(isinf(result));
     if (ok) {
         if (reconnect) atomicAdd(shift_success_reconnect, 1u);

@@ -7,18 +7,19 @@
 #include "lib/rng.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f) uniform writeonly image2D colorImage;
+// Read-write: a frame's samples are split over dispatches that each add their share.
+layout(rgba32f) uniform image2D colorImage;
 #if HAS_ALBEDO
-layout(rgba32f) uniform writeonly image2D albedoImage;
+layout(rgba32f) uniform image2D albedoImage;
 #endif
 #if HAS_NORMAL
-layout(rgba32f) uniform writeonly image2D normalImage;
+layout(rgba32f) uniform image2D normalImage;
 #endif
 #if HAS_DIRECT
-layout(rgba32f) uniform writeonly image2D directImage;
+layout(rgba32f) uniform image2D directImage;
 #endif
 #if HAS_INDIRECT
-layout(rgba32f) uniform writeonly image2D indirectImage;
+layout(rgba32f) uniform image2D indirectImage;
 #endif
 // Optional GBuffer inputs: the first sample's primary hit comes from the V-buffer instead of
 // a trace, with the GBuffer's film and lens sample (same random stream positions).
@@ -29,8 +30,12 @@ layout(rgba32ui) uniform readonly uimage2D vbufferImage;
 layout(rgba32f) uniform readonly image2D sampleImage;
 #endif
 
-// Rays traced this frame (closest + shadow), for Mrays/s.
-layout(std430) buffer RayCounter { uint ray_count; };
+// Rays traced this frame (closest + shadow), for Mrays/s, and the most BVH traversal steps one
+// invocation ran (against lavapipe's loop limit, see bvh.glsl).
+layout(std430) buffer RayCounter {
+    uint ray_count;
+    uint max_bvh_iterations;
+};
 
 const uint STRATEGY_MIS = 0u;   // NEE + BSDF sampling, MIS
 const uint STRATEGY_BSDF = 1u;  // BSDF sampling only (emitters hit by chance)
@@ -40,7 +45,9 @@ layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint frameIndex;
     uint seed;
-    uint spp;
+    uint spp;          // samples in this dispatch
+    uint sampleBase;   // samples of this frame taken by earlier dispatches (0: the first)
+    uint sppTotal;     // samples of this frame over all its dispatches
     uint maxBounces;   // scattering events; 1 = direct lighting only
     uint rrDepth;      // Russian roulette starts after this many bounces
     uint strategy;
@@ -52,7 +59,8 @@ layout(push_constant) uniform Params {
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (any(greaterThanEqual(pixel, pc.frameSize))) return;
-    Rng rng = rng_init(pixel, pc.frameIndex, pc.seed);
+    // Each dispatch of a frame draws from its own stream (the first one's is the unsplit stream).
+    Rng rng = rng_init(pixel, pc.frameIndex, pc.seed + pc.sampleBase * 0x632BE5ABu);
 
     vec3 sum = vec3(0.0), sum_direct = vec3(0.0);
     vec3 first_albedo = vec3(0.0), first_normal = vec3(0.0);
@@ -63,7 +71,7 @@ void main() {
         vec2 u_lens = rng_next2(rng);
         float shutter = pc.motionBlur != 0u ? rng_next(rng) : 0.0;
 #if HAS_SAMPLE
-        if (s == 0u) {
+        if (s == 0u && pc.sampleBase == 0u) {
             vec4 smp = imageLoad(sampleImage, ivec2(pixel));
             uv = (vec2(pixel) + smp.xy) / vec2(pc.frameSize);
             u_lens = smp.zw;
@@ -82,7 +90,7 @@ void main() {
             Hit hit;
             bool found;
 #if HAS_VBUFFER
-            if (s == 0u && depth == 0u) {
+            if (s == 0u && pc.sampleBase == 0u && depth == 0u) {
                 uvec4 v = imageLoad(vbufferImage, ivec2(pixel));
                 hit.prim = v.x;
                 hit.bary = uintBitsToFloat(v.yz);
@@ -171,18 +179,23 @@ void main() {
         sum_direct += L_direct;
     }
     atomicAdd(ray_count, rays);
-    float inv = 1.0 / float(pc.spp);
-    imageStore(colorImage, ivec2(pixel), vec4(sum * inv, 1.0));
+    atomicMax(max_bvh_iterations, bvh_iterations);
+    // This dispatch's share of the frame's mean, added to the earlier dispatches'.
+    float inv = 1.0 / float(pc.sppTotal);
+    bool first = pc.sampleBase == 0u;
+    ivec2 ip = ivec2(pixel);
+    vec4 zero = vec4(0.0);
+    imageStore(colorImage, ip, (first ? zero : imageLoad(colorImage, ip)) + vec4(sum * inv, first ? 1.0 : 0.0));
 #if HAS_ALBEDO
-    imageStore(albedoImage, ivec2(pixel), vec4(first_albedo * inv, 1.0));
+    imageStore(albedoImage, ip, (first ? zero : imageLoad(albedoImage, ip)) + vec4(first_albedo * inv, first ? 1.0 : 0.0));
 #endif
 #if HAS_NORMAL
-    imageStore(normalImage, ivec2(pixel), vec4(first_normal * inv, 1.0));
+    imageStore(normalImage, ip, (first ? zero : imageLoad(normalImage, ip)) + vec4(first_normal * inv, first ? 1.0 : 0.0));
 #endif
 #if HAS_DIRECT
-    imageStore(directImage, ivec2(pixel), vec4(sum_direct * inv, 1.0));
+    imageStore(directImage, ip, (first ? zero : imageLoad(directImage, ip)) + vec4(sum_direct * inv, first ? 1.0 : 0.0));
 #endif
 #if HAS_INDIRECT
-    imageStore(indirectImage, ivec2(pixel), vec4((sum - sum_direct) * inv, 1.0));
+    imageStore(indirectImage, ip, (first ? zero : imageLoad(indirectImage, ip)) + vec4((sum - sum_direct) * inv, first ? 1.0 : 0.0));
 #endif
 }

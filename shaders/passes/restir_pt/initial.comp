@@ -20,7 +20,10 @@ layout(std430) writeonly buffer ReservoirsOut {
     PathReservoir reservoirs_out[];
 };
 layout(std430) writeonly buffer PrimaryOut { PrimaryHit primary_out[]; };
-layout(std430) buffer RayCounter { uint ray_count; };
+layout(std430) buffer RayCounter {
+    uint ray_count;
+    uint max_bvh_iterations;  // most traversal steps of one invocation (bvh.glsl limit)
+};
 
 layout(push_constant) uniform Params {
     uvec2 frameSize;
@@ -84,4 +87,5 @@ void main() {
     reservoir_finalize(r);
     reservoirs_out[idx] = r;
     atomicAdd(ray_count, rays);
+    atomicMax(max_bvh_iterations, bvh_iterations);
 }
