@@ -22,6 +22,34 @@ namespace {
 using cli::parseUint;
 using cli::UsageError;
 
+// The marked output --out writes: the first one, except that an HDR file (.exr, .hdr, .pfm)
+// gets the first linear one (not a ToneMap pass's display image), named in the log.
+std::string portForOut(RenderGraph& graph, const std::string& file) {
+    std::string ext = std::filesystem::path(file).extension().string();
+    for (auto& c : ext) c = char(std::tolower(c));
+    const auto& marked = graph.outputs();
+    if (ext != ".exr" && ext != ".hdr" && ext != ".pfm") return marked.front();
+    std::string list;
+    for (const auto& port : marked) {
+        std::string pass = port.substr(0, port.find('.'));
+        for (auto& p : graph.passes())
+            if (p->name() == pass && p->type() != "ToneMap") {
+                if (port != marked.front())
+                    logInfo(
+                        "--out {}: writing the linear output {} (the first marked output, {}, "
+                        "is tone-mapped)",
+                        file, port, marked.front());
+                return port;
+            }
+        list += (list.empty() ? "" : ", ") + port;
+    }
+    throw UsageError("--out " + file +
+                     ": an HDR file needs linear radiance, but every marked "
+                     "output of graph '" +
+                     graph.name() + "' is tone-mapped (" + list +
+                     "); write one with --output PASS.PORT=" + file + " or use .png");
+}
+
 const char* kMainHelp = R"(loom - research rendering framework (render graphs on Vulkan compute)
 
 usage: loom <command> [options]
@@ -45,7 +73,8 @@ const char* kRenderHelp = R"(usage: loom render GRAPH [options]
   --frames N                frames to render (default 1)
   --seed K                  random seed (default 0); same seed, same image
   --device D                device index or name (default: LOOM_DEVICE, else lavapipe)
-  --out FILE                write the first marked output (.exr/.hdr/.png/.jpg)
+  --out FILE                write the first marked output (.png/.jpg), or for .exr/.hdr
+                            the first linear one (not a ToneMap display image)
   --output PASS.PORT=FILE   write a marked output (repeatable)
   --set PASS.PARAM=VALUE    set a parameter; VALUE is JSON (1.5, true, [1,2]) or a string
   --check-nan               fail if any float output holds NaN or Inf
@@ -95,7 +124,9 @@ into OUT.csv. Rows are sorted by the 'index' column when there is one, so merged
 equal the unsharded run. Empty files (shards that owned no values) are skipped.
 )";
 
-bool isHelp(const std::string& a) { return a == "--help" || a == "-h"; }
+bool isHelp(const std::string& a) {
+    return a == "--help" || a == "-h";
+}
 
 json parseValue(const std::string& v) {
     try {
@@ -127,26 +158,41 @@ int cmdRender(const std::vector<std::string>& args) {
         if (isHelp(a)) {
             std::cout << kRenderHelp;
             return 0;
-        } else if (a == "--width") o.width = parseUint(a, next());
-        else if (a == "--height") o.height = parseUint(a, next());
-        else if (a == "--frames") frames = parseUint(a, next());
-        else if (a == "--seed") o.seed = parseUint(a, next());
-        else if (a == "--device") o.device = next();
-        else if (a == "--scene") o.scene = next();
+        } else if (a == "--width")
+            o.width = parseUint(a, next());
+        else if (a == "--height")
+            o.height = parseUint(a, next());
+        else if (a == "--frames")
+            frames = parseUint(a, next());
+        else if (a == "--seed")
+            o.seed = parseUint(a, next());
+        else if (a == "--device")
+            o.device = next();
+        else if (a == "--scene")
+            o.scene = next();
         else if (a == "--define") {
             auto [k, v] = splitAssign(a, next());
             o.sceneDefines[k] = v;
-        }
-        else if (a == "--out") out = next();
-        else if (a == "--output") outputs.push_back(splitAssign(a, next()));
-        else if (a == "--set") sets.push_back(splitAssign(a, next()));
-        else if (a == "--check-nan") checkNan = true;
-        else if (a == "--timings") timings = true;
-        else if (a == "--validation") o.validation = true;
-        else if (a == "--quiet") setLogLevel(LogLevel::Error);
-        else if (a.rfind("--", 0) == 0) throw UsageError("render: unknown option '" + a + "' (see loom render --help)");
-        else if (o.graph.empty()) o.graph = a;
-        else throw UsageError("render: unexpected argument '" + a + "'");
+        } else if (a == "--out")
+            out = next();
+        else if (a == "--output")
+            outputs.push_back(splitAssign(a, next()));
+        else if (a == "--set")
+            sets.push_back(splitAssign(a, next()));
+        else if (a == "--check-nan")
+            checkNan = true;
+        else if (a == "--timings")
+            timings = true;
+        else if (a == "--validation")
+            o.validation = true;
+        else if (a == "--quiet")
+            setLogLevel(LogLevel::Error);
+        else if (a.rfind("--", 0) == 0)
+            throw UsageError("render: unknown option '" + a + "' (see loom render --help)");
+        else if (o.graph.empty())
+            o.graph = a;
+        else
+            throw UsageError("render: unexpected argument '" + a + "'");
     }
     if (o.graph.empty()) throw UsageError("render: missing GRAPH (see loom render --help)");
     if (o.width == 0 || o.height == 0 || o.width > 16384 || o.height > 16384)
@@ -177,11 +223,10 @@ int cmdRender(const std::vector<std::string>& args) {
     if (checkNan) r.checkNaN();
 
     if (outputs.empty()) {
-        std::string port = r.graph().outputs().front();
         if (out.empty()) out = "out/" + r.graph().name() + ".png";
-        outputs.push_back({port, out});
+        outputs.push_back({portForOut(r.graph(), out), out});
     } else if (!out.empty()) {
-        outputs.insert(outputs.begin(), {r.graph().outputs().front(), out});
+        outputs.insert(outputs.begin(), {portForOut(r.graph(), out), out});
     }
     for (auto& [port, file] : outputs) {
         writeImage(file, r.readOutput(port));
@@ -319,7 +364,8 @@ json passesJson() {
             j["params"].push_back(pj);
         }
         j["persistent"] = json::array();
-        for (auto& p : r.persistent()) j["persistent"].push_back({{"name", p.name}, {"doc", p.doc}});
+        for (auto& p : r.persistent())
+            j["persistent"].push_back({{"name", p.name}, {"doc", p.doc}});
         all.push_back(j);
     }
     return all;
@@ -332,8 +378,10 @@ int cmdPasses(const std::vector<std::string>& args) {
             std::cout << kPassesHelp;
             return 0;
         }
-        if (a == "--json") asJson = true;
-        else throw UsageError("passes: unknown option '" + a + "'");
+        if (a == "--json")
+            asJson = true;
+        else
+            throw UsageError("passes: unknown option '" + a + "'");
     }
     json all = passesJson();
     if (asJson) {
@@ -346,8 +394,7 @@ int cmdPasses(const std::vector<std::string>& args) {
             for (auto& port : p[dir])
                 std::cout << "  " << (dir[0] == 'i' ? "in  " : "out ")
                           << port["name"].get<std::string>() << " : "
-                          << port["kind"].get<std::string>()
-                          << (port.contains("format") ? " " : "")
+                          << port["kind"].get<std::string>() << (port.contains("format") ? " " : "")
                           << (port.contains("format") ? port["format"].get<std::string>() : "")
                           << (port["optional"].get<bool>() ? " (optional)" : "") << "  "
                           << port["doc"].get<std::string>() << "\n";

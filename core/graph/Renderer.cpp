@@ -17,6 +17,14 @@ namespace loom {
 
 namespace fs = std::filesystem;
 
+std::string installedDataDir() {
+    std::error_code ec;
+    auto exe = fs::read_symlink("/proc/self/exe", ec);
+    if (ec) return "";
+    auto share = exe.parent_path().parent_path() / "share/loom";
+    return fs::exists(share / "shaders") ? share.string() : "";
+}
+
 std::vector<std::string> defaultShaderPaths() {
     std::vector<std::string> paths;
     if (const char* env = std::getenv("LOOM_SHADER_PATH")) {
@@ -25,22 +33,19 @@ std::vector<std::string> defaultShaderPaths() {
         while (std::getline(ss, p, ':'))
             if (!p.empty()) paths.push_back(p);
     }
-    std::string src = LOOM_SOURCE_DIR;
-    if (!src.empty() && fs::exists(src + "/shaders")) {
-        paths.push_back(src + "/shaders");
-        paths.push_back(src);  // lets graphs name "shaders/..." or "tests/data/..."
-    }
-    std::error_code ec;
-    auto exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-        auto share = exe.parent_path().parent_path() / "share/loom/shaders";
-        if (fs::exists(share)) paths.push_back(share.string());
+    // An installed loom (PREFIX/bin/loom next to PREFIX/share/loom) uses its own copy only, so
+    // it behaves the same whether or not the source tree it was built from still exists.
+    std::string root = installedDataDir();
+    if (root.empty() && fs::exists(std::string(LOOM_SOURCE_DIR) + "/shaders"))
+        root = LOOM_SOURCE_DIR;
+    if (!root.empty()) {
+        paths.push_back(root + "/shaders");
+        paths.push_back(root);  // lets graphs name "shaders/..." or "tests/data/..."
     }
     return paths;
 }
 
-Renderer::Renderer(const Options& o)
-    : mWidth(o.width), mHeight(o.height), mSeed(o.seed) {
+Renderer::Renderer(const Options& o) : mWidth(o.width), mHeight(o.height), mSeed(o.seed) {
     gpu::Context::Options go;
     go.device = o.device;
     go.validation = o.validation;
@@ -69,10 +74,9 @@ void Renderer::setScene(scene::Scene s) {
 
 Renderer::Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph,
                    uint32_t width, uint32_t height, uint32_t seed, std::string cacheDir)
-    : mGpu(std::move(gpu)), mGraph(std::move(graph)), mWidth(width), mHeight(height),
-      mSeed(seed) {
-    mCompiler = std::make_unique<ShaderCompiler>(
-        defaultShaderPaths(), cacheDir.empty() ? mGpu->cacheDir() : cacheDir);
+    : mGpu(std::move(gpu)), mGraph(std::move(graph)), mWidth(width), mHeight(height), mSeed(seed) {
+    mCompiler = std::make_unique<ShaderCompiler>(defaultShaderPaths(),
+                                                 cacheDir.empty() ? mGpu->cacheDir() : cacheDir);
     mCompiler->addSearchPath(mGraph->sourceDir());
     mShaders = std::make_unique<ShaderLibrary>(*mGpu, *mCompiler);
 }

@@ -11,12 +11,14 @@
 namespace loom::scene {
 class SceneGpu;
 struct Scene;
-}
+}  // namespace loom::scene
 
 namespace loom {
 
-// Directories shaders are searched in: $LOOM_SHADER_PATH (colon-separated), the build tree's
-// source shaders/, then shaders/ next to the executable's ../share/loom.
+// PREFIX/share/loom when this executable is an installed PREFIX/bin one, else "".
+std::string installedDataDir();
+// Directories shaders are searched in: $LOOM_SHADER_PATH (colon-separated), then the installed
+// PREFIX/share/loom/shaders, or in a build tree the source tree's shaders/.
 std::vector<std::string> defaultShaderPaths();
 
 class Renderer {
@@ -34,18 +36,19 @@ public:
     explicit Renderer(const Options& options);
     ~Renderer();
     // Use an existing context (tests share one).
-    Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph,
-             uint32_t width, uint32_t height, uint32_t seed = 0, std::string cacheDir = "");
+    Renderer(std::shared_ptr<gpu::Context> gpu, std::unique_ptr<RenderGraph> graph, uint32_t width,
+             uint32_t height, uint32_t seed = 0, std::string cacheDir = "");
 
     void frame();
-    void frames(uint32_t n) { for (uint32_t i = 0; i < n; ++i) frame(); }
+    void frames(uint32_t n) {
+        for (uint32_t i = 0; i < n; ++i) frame();
+    }
     void resize(uint32_t width, uint32_t height);
     // Restart accumulation and history (bumps the external revision).
     void reset();
     void setSeed(uint32_t seed) { mSeed = seed; }
     // Loads a scene (replacing any previous one); its camera drives the frames.
-    void loadScene(const std::string& path,
-                   const std::map<std::string, std::string>& defines = {});
+    void loadScene(const std::string& path, const std::map<std::string, std::string>& defines = {});
     void setScene(scene::Scene scene);
     scene::SceneGpu* scene() { return mScene.get(); }
     // Animation time in frames (camera paths); constant unless the application steps it.

@@ -356,7 +356,9 @@ std::string resolveInput(Host& h, const std::string& path, const std::string& fn
         if (fs::exists(p)) return p.string();
         tried.push_back(h.scriptDir);
     }
-    std::string src = LOOM_SOURCE_DIR;
+    // Installed: PREFIX/share/loom (graphs/, scripts/, scenes/); in a build tree: the sources.
+    std::string src = installedDataDir();
+    if (src.empty()) src = LOOM_SOURCE_DIR;
     if (!src.empty()) {
         fs::path p = fs::path(src) / path;
         if (fs::exists(p)) return p.string();

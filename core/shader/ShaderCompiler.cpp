@@ -5,11 +5,11 @@
 #include <glslang/SPIRV/GlslangToSpv.h>
 #include <glslang/build_info.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <unistd.h>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -60,7 +60,8 @@ std::string prepareSource(const std::string& text, const std::string& path) {
         }
     }
     if (!inserted)
-        throw ShaderCompileError(path + ":1: error: shader has no #version line (use #version 460)");
+        throw ShaderCompileError(path +
+                                 ":1: error: shader has no #version line (use #version 460)");
     return out;
 }
 
@@ -182,7 +183,8 @@ std::string shaderCompilerVersion() {
 
 ShaderCompiler::ShaderCompiler(std::vector<std::string> searchPaths, std::string cacheDir)
     : mSearchPaths(std::move(searchPaths)), mCacheDir(std::move(cacheDir)) {
-    if (const char* env = std::getenv("LOOM_SHADER_DEFINES")) mGlobalDefines = parseShaderDefines(env);
+    if (const char* env = std::getenv("LOOM_SHADER_DEFINES"))
+        mGlobalDefines = parseShaderDefines(env);
 }
 
 ShaderDefines parseShaderDefines(const std::string& text) {
@@ -192,7 +194,8 @@ ShaderDefines parseShaderDefines(const std::string& text) {
     while (std::getline(ss, item, ';')) {
         if (item.find_first_not_of(" \t") == std::string::npos) continue;
         auto eq = item.find('=');
-        std::string name = item.substr(0, eq), value = eq == std::string::npos ? "1" : item.substr(eq + 1);
+        std::string name = item.substr(0, eq),
+                    value = eq == std::string::npos ? "1" : item.substr(eq + 1);
         static const std::regex ident(R"(\s*([A-Za-z_][A-Za-z0-9_]*)\s*)");
         std::smatch m;
         if (!std::regex_match(name, m, ident))

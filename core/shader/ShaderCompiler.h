@@ -22,7 +22,7 @@ public:
 };
 
 struct CompiledShader {
-    std::string path;                  // resolved main file
+    std::string path;  // resolved main file
     ShaderDefines defines;
     std::vector<uint32_t> spirv;
     ShaderReflection reflection;

@@ -2,8 +2,8 @@
 // lens, camera motion blur) with AOVs. See README.md.
 #include <fmt/format.h>
 
-#include "core/gpu/CounterBuffer.h"
 #include <algorithm>
+#include "core/gpu/CounterBuffer.h"
 
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
@@ -76,7 +76,9 @@ public:
                 .set("sppTotal", spp)
                 .set("maxBounces", maxBounces)
                 .set("rrDepth", uint32_t(param<int>("rrDepth")))
-                .set("strategy", uint32_t(strategy == "mis" ? 0 : strategy == "bsdf" ? 1 : 2))
+                .set("strategy", uint32_t(strategy == "mis"    ? 0
+                                          : strategy == "bsdf" ? 1
+                                                               : 2))
                 .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
                 .set("motionBlur", uint32_t(param<bool>("motionBlur")))
                 .set("clampValue", float(param<double>("clamp")));
@@ -88,10 +90,11 @@ public:
         mRayCounter.read(gpu);
         // A traversal that reached lavapipe's loop limit was cut short: the image is wrong.
         if (mRayCounter[1] >= 65535u - 16u && !mWarnedLoopLimit) {
-            logWarning("PathTracer: an invocation ran {} BVH traversal steps in one dispatch, "
-                       "at lavapipe's loop limit (65535): some rays were cut short and the image "
-                       "is wrong; lower maxBounces or use a GPU device",
-                       mRayCounter[1]);
+            logWarning(
+                "PathTracer: an invocation ran {} BVH traversal steps in one dispatch, "
+                "at lavapipe's loop limit (65535): some rays were cut short and the image "
+                "is wrong; lower maxBounces or use a GPU device",
+                mRayCounter[1]);
             mWarnedLoopLimit = true;
         }
     }

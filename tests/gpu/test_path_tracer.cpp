@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <sstream>
 #include <glm/gtc/matrix_transform.hpp>
+#include <sstream>
 
 #include "core/graph/Renderer.h"
 #include "core/scene/Camera.h"
@@ -39,7 +39,8 @@ std::unique_ptr<RenderGraph> ptGraph(const json& ptParams, bool withGBuffer = fa
               {"edges", json::array()},
               {"outputs", {"pt.color"}}};
     if (withGBuffer) {
-        g["passes"].push_back({{"name", "gbuf"}, {"type", "GBuffer"},
+        g["passes"].push_back({{"name", "gbuf"},
+                               {"type", "GBuffer"},
                                {"params", {{"jitter", true}, {"motionBlur", false}}}});
         g["outputs"].push_back("gbuf.position");
         g["outputs"].push_back("gbuf.geoNormal");
@@ -293,22 +294,53 @@ const std::vector<PolygonCase>& polygonCases() {
     static const std::vector<PolygonCase> cases = {
         // Facing down at height 0.5: points directly below and far off axis (grazing). Large
         // enough for BSDF sampling to hit it about every other sample.
-        {"rectangle overhead", {{-0.8f, 0.5f, -0.8f}, {0.8f, 0.5f, -0.8f}, {0.8f, 0.5f, 0.6f}, {-0.8f, 0.5f, 0.6f}},
-         2.0f, {0.0f, 2.2f, 3.2f}, {0.0f, 0.0f, 0.0f}, 65.0f, true},
+        {"rectangle overhead",
+         {{-0.8f, 0.5f, -0.8f}, {0.8f, 0.5f, -0.8f}, {0.8f, 0.5f, 0.6f}, {-0.8f, 0.5f, 0.6f}},
+         2.0f,
+         {0.0f, 2.2f, 3.2f},
+         {0.0f, 0.0f, 0.0f},
+         65.0f,
+         true},
         // Tilted triangle whose lowest edge is 0.01 above the floor: points very close to it.
-        {"triangle close", {{-0.4f, 0.01f, 0.0f}, {0.0f, 0.45f, -0.35f}, {0.4f, 0.01f, 0.0f}},
-         3.0f, {0.0f, 0.9f, 1.2f}, {0.0f, 0.0f, 0.1f}, 60.0f, false},
+        {"triangle close",
+         {{-0.4f, 0.01f, 0.0f}, {0.0f, 0.45f, -0.35f}, {0.4f, 0.01f, 0.0f}},
+         3.0f,
+         {0.0f, 0.9f, 1.2f},
+         {0.0f, 0.0f, 0.1f},
+         60.0f,
+         false},
         // Vertical, facing +x: floor points near x = 0 see it almost edge-on (nearly in its
         // plane), points at x < 0 are behind it.
-        {"rectangle edge-on", {{0.0f, 0.05f, -0.4f}, {0.0f, 0.6f, -0.4f}, {0.0f, 0.6f, 0.4f}, {0.0f, 0.05f, 0.4f}},
-         3.0f, {0.6f, 1.4f, 1.3f}, {0.4f, 0.0f, 0.0f}, 60.0f, false},
+        {"rectangle edge-on",
+         {{0.0f, 0.05f, -0.4f}, {0.0f, 0.6f, -0.4f}, {0.0f, 0.6f, 0.4f}, {0.0f, 0.05f, 0.4f}},
+         3.0f,
+         {0.6f, 1.4f, 1.3f},
+         {0.4f, 0.0f, 0.0f},
+         60.0f,
+         false},
         // Far and large: 40 x 40 at height 12.
-        {"rectangle far", {{-20.0f, 12.0f, -20.0f}, {20.0f, 12.0f, -20.0f}, {20.0f, 12.0f, 20.0f}, {-20.0f, 12.0f, 20.0f}},
-         1.0f, {0.0f, 2.0f, 3.0f}, {0.0f, 0.0f, 0.0f}, 50.0f, true},
+        {"rectangle far",
+         {{-20.0f, 12.0f, -20.0f},
+          {20.0f, 12.0f, -20.0f},
+          {20.0f, 12.0f, 20.0f},
+          {-20.0f, 12.0f, 20.0f}},
+         1.0f,
+         {0.0f, 2.0f, 3.0f},
+         {0.0f, 0.0f, 0.0f},
+         50.0f,
+         true},
         // Tiny and far (solid angle ~1e-5 sr: the area-sampling fallback); BSDF sampling
         // would almost never hit it.
-        {"rectangle tiny far", {{-0.05f, 30.0f, -0.05f}, {0.05f, 30.0f, -0.05f}, {0.05f, 30.0f, 0.05f}, {-0.05f, 30.0f, 0.05f}},
-         2e5f, {0.0f, 2.0f, 3.0f}, {0.0f, 0.0f, 0.0f}, 50.0f, false},
+        {"rectangle tiny far",
+         {{-0.05f, 30.0f, -0.05f},
+          {0.05f, 30.0f, -0.05f},
+          {0.05f, 30.0f, 0.05f},
+          {-0.05f, 30.0f, 0.05f}},
+         2e5f,
+         {0.0f, 2.0f, 3.0f},
+         {0.0f, 0.0f, 0.0f},
+         50.0f,
+         false},
     };
     return cases;
 }
@@ -369,10 +401,12 @@ TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
         std::vector<double> expected(kSize * kSize, 0.0), coarse(kSize * kSize, 0.0);
         {
             json g = {{"name", "gbuffer"},
-                      {"passes", {{{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
+                      {"passes",
+                       {{{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
                       {"edges", json::array()},
                       {"outputs", {"gbuf.position", "gbuf.vbuffer"}}};
-            Renderer r(sharedGpu(), RenderGraph::parse(g.dump(), "<test>"), kSize * kSub, kSize * kSub);
+            Renderer r(sharedGpu(), RenderGraph::parse(g.dump(), "<test>"), kSize * kSub,
+                       kSize * kSub);
             r.setScene(scene);
             r.frame();
             ImageData pos = r.readOutput("gbuf.position"), vb = r.readOutput("gbuf.vbuffer");
@@ -385,7 +419,8 @@ TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
                         continue;
                     }
                     dvec3 xw(pos.pixels[i * 4], 0.0, pos.pixels[i * 4 + 2]);
-                    double L = kFloorAlbedo / M_PI * polygonIrradiance(xw, {0, 1, 0}, poly, pc.radiance);
+                    double L =
+                        kFloorAlbedo / M_PI * polygonIrradiance(xw, {0, 1, 0}, poly, pc.radiance);
                     expected[p] += L / (kSub * kSub);
                     if ((x % 2) && (y % 2)) coarse[p] += L / (kSub * kSub / 4);
                 }
@@ -406,13 +441,16 @@ TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
         // Quadrature uncertainty: the difference to the rule on every other point (which is of
         // lower order, so this overestimates it), added to each pixel's standard error.
         std::vector<double> quadrature(kSize * kSize);
-        for (size_t i = 0; i < quadrature.size(); ++i) quadrature[i] = std::abs(expected[i] - coarse[i]);
+        for (size_t i = 0; i < quadrature.size(); ++i)
+            quadrature[i] = std::abs(expected[i] - coarse[i]);
         for (const char* strategy : {"nee", "mis", "bsdf"}) {
             bool bsdf = std::string(strategy) == "bsdf";
             if (bsdf && !pc.bsdfFeasible) continue;
             int spp = bsdf ? 64 : 16;
             Renderer r(sharedGpu(),
-                       ptGraph({{"strategy", strategy}, {"samplesPerPixel", spp}, {"maxBounces", 1},
+                       ptGraph({{"strategy", strategy},
+                                {"samplesPerPixel", spp},
+                                {"maxBounces", 1},
                                 {"motionBlur", false}}),
                        kSize, kSize, 11);
             r.setScene(scene);
@@ -433,10 +471,11 @@ TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
                 c = comparePixels(sum, sum2, frames, expected, quadrature);
                 if (c.relSe < 7.5e-4 || frames >= 1024) break;
             }
-            std::printf("%-20s %-4s %3d frames x %3d spp, %4d px: rel. bias %+.4f%% (se %.4f%%), "
-                        "max |z| %.2f, mean z^2 %.3f, unreached %.1e\n",
-                        pc.name, strategy, frames, spp, c.pixels, 100 * c.relBias, 100 * c.relSe,
-                        c.maxAbsZ, c.meanZ2, c.unreached);
+            std::printf(
+                "%-20s %-4s %3d frames x %3d spp, %4d px: rel. bias %+.4f%% (se %.4f%%), "
+                "max |z| %.2f, mean z^2 %.3f, unreached %.1e\n",
+                pc.name, strategy, frames, spp, c.pixels, 100 * c.relBias, 100 * c.relSe, c.maxAbsZ,
+                c.meanZ2, c.unreached);
             EXPECT_GT(c.pixels, 200) << pc.name;
             EXPECT_LT(c.unreached, 1e-4) << pc.name << " " << strategy;
             EXPECT_LT(c.relSe, 7.5e-4) << pc.name << " " << strategy << ": too noisy to see 0.3%";
@@ -445,7 +484,8 @@ TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
             // Bonferroni over ~1000 pixels (P ~ 6e-4 under the null), and the mean of z^2, which
             // sees a small bias spread over many pixels (~1 +- 0.045 for 1000 pixels).
             EXPECT_LT(c.maxAbsZ, 5.0) << pc.name << " " << strategy;
-            EXPECT_LT(c.meanZ2, 1.0 + 5.0 * std::sqrt(2.0 / c.pixels)) << pc.name << " " << strategy;
+            EXPECT_LT(c.meanZ2, 1.0 + 5.0 * std::sqrt(2.0 / c.pixels))
+                << pc.name << " " << strategy;
         }
     }
 }
@@ -464,9 +504,9 @@ TEST(PathTracer, EmissiveEnclosureMatchesGeometricSeries) {
     wall.reflectance = glm::vec3(kRho);
     s.materials.push_back(wall);
     // Six rectangles facing the centre (makeRectangle faces +z).
-    const std::pair<glm::vec3, float> faces[] = {{{0, 1, 0}, 0.0f},   {{0, 1, 0}, 180.0f},
-                                                 {{0, 1, 0}, 90.0f},  {{0, 1, 0}, -90.0f},
-                                                 {{1, 0, 0}, 90.0f},  {{1, 0, 0}, -90.0f}};
+    const std::pair<glm::vec3, float> faces[] = {{{0, 1, 0}, 0.0f},  {{0, 1, 0}, 180.0f},
+                                                 {{0, 1, 0}, 90.0f}, {{0, 1, 0}, -90.0f},
+                                                 {{1, 0, 0}, 90.0f}, {{1, 0, 0}, -90.0f}};
     for (auto [axis, angle] : faces) {
         Shape w;
         w.mesh = 0;
@@ -490,8 +530,11 @@ TEST(PathTracer, EmissiveEnclosureMatchesGeometricSeries) {
         expected.assign(kSize * kSize, L);
         for (const char* strategy : {"nee", "mis", "bsdf"}) {
             Renderer r(sharedGpu(),
-                       ptGraph({{"strategy", strategy}, {"samplesPerPixel", 8}, {"maxBounces", n},
-                                {"rrDepth", rrDepth}, {"motionBlur", false}}),
+                       ptGraph({{"strategy", strategy},
+                                {"samplesPerPixel", 8},
+                                {"maxBounces", n},
+                                {"rrDepth", rrDepth},
+                                {"motionBlur", false}}),
                        kSize, kSize, 5);
             r.setScene(s);
             std::vector<double> sum(kSize * kSize, 0.0), sum2(kSize * kSize, 0.0);
@@ -511,18 +554,21 @@ TEST(PathTracer, EmissiveEnclosureMatchesGeometricSeries) {
                 c = comparePixels(sum, sum2, frames, expected);
                 if (c.relSe < 5e-4 || frames >= 512) break;
             }
-            std::printf("enclosure n=%-2d rr %-2d %-4s %3d frames: mean %.5f (expected %.5f), rel. bias "
-                        "%+.4f%% (se %.4f%%), max |z| %.2f, mean z^2 %.3f\n",
-                        n, rrDepth, strategy, frames, L * (1.0 + c.relBias), L, 100 * c.relBias,
-                        100 * c.relSe, c.maxAbsZ, c.meanZ2);
+            std::printf(
+                "enclosure n=%-2d rr %-2d %-4s %3d frames: mean %.5f (expected %.5f), rel. bias "
+                "%+.4f%% (se %.4f%%), max |z| %.2f, mean z^2 %.3f\n",
+                n, rrDepth, strategy, frames, L * (1.0 + c.relBias), L, 100 * c.relBias,
+                100 * c.relSe, c.maxAbsZ, c.meanZ2);
             EXPECT_LT(c.relSe, 5e-4) << "n " << n << " " << strategy;
             // BSDF sampling is exact here before Russian roulette (f / p = rho, every ray hits
             // an emitter): no spread at all.
-            EXPECT_LE(std::abs(c.relBias), std::max(4.0 * c.relSe, 1e-6)) << "n " << n << " " << strategy;
+            EXPECT_LE(std::abs(c.relBias), std::max(4.0 * c.relSe, 1e-6))
+                << "n " << n << " " << strategy;
             EXPECT_LT(std::abs(c.relBias), 2e-3) << "n " << n << " " << strategy;
             if (!roulette && c.pixels > 0) {
                 EXPECT_LT(c.maxAbsZ, 5.0) << "n " << n << " " << strategy;
-                EXPECT_LT(c.meanZ2, 1.0 + 5.0 * std::sqrt(2.0 / c.pixels)) << "n " << n << " " << strategy;
+                EXPECT_LT(c.meanZ2, 1.0 + 5.0 * std::sqrt(2.0 / c.pixels))
+                    << "n " << n << " " << strategy;
             }
         }
     }
@@ -542,10 +588,11 @@ constexpr uint32_t kStrategySize = 32;
 // strategy samples alike, and that coverage noise would swamp the light-transport comparison.
 std::vector<bool> directEmitterMask(const Scene& scene) {
     constexpr uint32_t kSub = 4, n = kStrategySize;
-    json g = {{"name", "gbuffer"},
-              {"passes", {{{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
-              {"edges", json::array()},
-              {"outputs", {"gbuf.vbuffer"}}};
+    json g = {
+        {"name", "gbuffer"},
+        {"passes", {{{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
+        {"edges", json::array()},
+        {"outputs", {"gbuf.vbuffer"}}};
     Renderer r(sharedGpu(), RenderGraph::parse(g.dump(), "<test>"), n * kSub, n * kSub);
     r.setScene(scene);
     ImageData vb = r.readOutput("gbuf.vbuffer");
@@ -569,12 +616,13 @@ std::vector<bool> directEmitterMask(const Scene& scene) {
     return mask;
 }
 
-StrategyRun renderStrategy(const Scene& scene, const std::vector<bool>& mask,
-                           const char* strategy, int spp, int frames, int maxBounces,
-                           uint32_t seed) {
+StrategyRun renderStrategy(const Scene& scene, const std::vector<bool>& mask, const char* strategy,
+                           int spp, int frames, int maxBounces, uint32_t seed) {
     Renderer r(sharedGpu(),
-               ptGraph({{"strategy", strategy}, {"samplesPerPixel", spp},
-                        {"maxBounces", maxBounces}, {"motionBlur", false}}),
+               ptGraph({{"strategy", strategy},
+                        {"samplesPerPixel", spp},
+                        {"maxBounces", maxBounces},
+                        {"motionBlur", false}}),
                kStrategySize, kStrategySize, seed);
     r.setScene(scene);
     StrategyRun run;
@@ -611,7 +659,8 @@ Agreement compareRegions(const RegionStats& a, const RegionStats& b, double zLim
     for (size_t i = 0; i < a.sum.size(); i += 3) {
         double se = std::sqrt(a.stderr2(i) + b.stderr2(i));
         if (se > 0.0) g.maxZ = std::max(g.maxZ, std::abs(a.mean(i) - b.mean(i)) / se);
-        if (unmasked[i / 3] >= 0.5 && b.mean(i) >= floorMean) detect.push_back(zLimit * se / b.mean(i));
+        if (unmasked[i / 3] >= 0.5 && b.mean(i) >= floorMean)
+            detect.push_back(zLimit * se / b.mean(i));
     }
     std::sort(detect.begin(), detect.end());
     if (!detect.empty()) {
@@ -647,7 +696,9 @@ TEST(PathTracer, StrategiesAgreeOnProjectScenes) {
     // region (7% in the worst lit one). LOOM_PT_STRATEGY_SCALE=k renders k times the frames (6
     // reaches 3% in every lit region); LOOM_PT_STRATEGY_SCENES="a.json;b.xml" (paths relative to
     // the source tree) checks other scenes at the same budget.
-    int scale = std::getenv("LOOM_PT_STRATEGY_SCALE") ? std::max(1, std::atoi(std::getenv("LOOM_PT_STRATEGY_SCALE"))) : 1;
+    int scale = std::getenv("LOOM_PT_STRATEGY_SCALE")
+                    ? std::max(1, std::atoi(std::getenv("LOOM_PT_STRATEGY_SCALE")))
+                    : 1;
     std::vector<Case> cases = {{"scenes/cornell_box.json", 1024, 64, 64, 3}};
     if (const char* e = std::getenv("LOOM_PT_STRATEGY_SCENES")) {
         cases.clear();
@@ -668,25 +719,31 @@ TEST(PathTracer, StrategiesAgreeOnProjectScenes) {
         Scene scene = loadScene(path);
         scene.camera.path.clear();
         std::vector<bool> mask = directEmitterMask(scene);
-        StrategyRun bsdf = renderStrategy(scene, mask, "bsdf", c.bsdfSpp, c.frames, c.maxBounces, 1);
-        std::vector<double> unmasked8 = unmaskedFraction(mask, 8), unmasked1 = unmaskedFraction(mask, 1);
+        StrategyRun bsdf =
+            renderStrategy(scene, mask, "bsdf", c.bsdfSpp, c.frames, c.maxBounces, 1);
+        std::vector<double> unmasked8 = unmaskedFraction(mask, 8),
+                            unmasked1 = unmaskedFraction(mask, 1);
         for (const char* strategy : {"nee", "mis"}) {
-            StrategyRun run = renderStrategy(scene, mask, strategy, c.neeSpp, c.frames, c.maxBounces, 2);
+            StrategyRun run =
+                renderStrategy(scene, mask, strategy, c.neeSpp, c.frames, c.maxBounces, 2);
             Agreement regions = compareRegions(run.regions, bsdf.regions, 4.5, unmasked8);
             Agreement image = compareRegions(run.image, bsdf.image, 4.0, unmasked1);
-            std::printf("%s %s vs bsdf: image %+.3f%% (|z| %.2f, detects %.2f%%), regions max |z| "
-                        "%.2f (detects %.2f%%, median region %.2f%%)\n",
-                        c.scene, strategy, 100 * (run.image.mean(0) / bsdf.image.mean(0) - 1.0),
-                        image.maxZ, 100 * image.detectable, regions.maxZ, 100 * regions.detectable,
-                        100 * regions.medianDetectable);
+            std::printf(
+                "%s %s vs bsdf: image %+.3f%% (|z| %.2f, detects %.2f%%), regions max |z| "
+                "%.2f (detects %.2f%%, median region %.2f%%)\n",
+                c.scene, strategy, 100 * (run.image.mean(0) / bsdf.image.mean(0) - 1.0), image.maxZ,
+                100 * image.detectable, regions.maxZ, 100 * regions.detectable,
+                100 * regions.medianDetectable);
             EXPECT_LT(image.maxZ, 4.0) << c.scene << " " << strategy;
             EXPECT_LT(regions.maxZ, 4.5) << c.scene << " " << strategy;
             EXPECT_LT(image.detectable, 0.01) << c.scene << " " << strategy << ": too weak";
-            EXPECT_LT(regions.detectable, regionPower) << c.scene << " " << strategy << ": too weak";
+            EXPECT_LT(regions.detectable, regionPower)
+                << c.scene << " " << strategy << ": too weak";
         }
         // A real bias in light sampling must fail the same comparison.
         ::setenv("LOOM_SHADER_DEFINES", "LOOM_TEST_LIGHT_PDF_SCALE=1.02", 1);
-        StrategyRun biased = renderStrategy(scene, mask, "nee", c.neeSpp, c.frames, c.maxBounces, 2);
+        StrategyRun biased =
+            renderStrategy(scene, mask, "nee", c.neeSpp, c.frames, c.maxBounces, 2);
         ::unsetenv("LOOM_SHADER_DEFINES");
         Agreement image = compareRegions(biased.image, bsdf.image, 4.0, unmasked1);
         std::printf("%s nee with light pdf x 1.02 vs bsdf: image %+.3f%% (|z| %.2f)\n", c.scene,
@@ -707,7 +764,8 @@ TEST(PathTracer, MotionBlurEqualsAverageOfInstants) {
     glm::vec3 up = glm::normalize(glm::vec3(cam.toWorld[1]));
     glm::vec3 right = glm::normalize(glm::cross(fwd, up));
     float step = 0.08f * glm::length(o);
-    cam.path = {{0.0f, o, o + fwd, up, cam.fov}, {1.0f, o + step * right, o + step * right + fwd, up, cam.fov}};
+    cam.path = {{0.0f, o, o + fwd, up, cam.fov},
+                {1.0f, o + step * right, o + step * right + fwd, up, cam.fov}};
     cam.fovAxis = Camera::FovAxis::X;
 
     RegionStats blurred(4), instants(4);

@@ -228,6 +228,31 @@ TEST(LoomCli, PassesJsonCoversEveryRegisteredPass) {
     EXPECT_EQ((*tm)["inputs"][0]["format"], "rgba32f");
 }
 
+// --out with an HDR extension writes linear radiance (graphs/pt.json marks tm.output first),
+// and says so; a graph with only tone-mapped outputs is refused for .exr with a clear message.
+TEST(LoomCli, OutHdrWritesTheFirstLinearOutput) {
+    TempDir tmp("loom-out-hdr");
+    std::string graph = std::string(LOOM_SOURCE_DIR) + "/graphs/pt.json";
+    std::string scene = std::string(LOOM_SOURCE_DIR) + "/scenes/cornell_box.json";
+    auto r = runLoom("render '" + graph + "' --scene '" + scene + "' --width 8 --height 8 --out '" +
+                     (tmp / "a.exr") + "'");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("(accum.output,"), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("writing the linear output accum.output"), std::string::npos) << r.err;
+    r = runLoom("render '" + graph + "' --scene '" + scene + "' --width 8 --height 8 --out '" +
+                (tmp / "a.png") + "'");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("(tm.output,"), std::string::npos) << r.out;
+    loom::test::writeFile(tmp / "tm_only.json", R"({"name": "tm_only", "passes": [
+        {"name": "pt", "type": "PathTracer"}, {"name": "tm", "type": "ToneMap"}],
+        "edges": [["pt.color", "tm.input"]], "outputs": ["tm.output"]})");
+    r = runLoom("render '" + (tmp / "tm_only.json") + "' --scene '" + scene +
+                "' --width 8 --height 8 --out '" + (tmp / "b.exr") + "'");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("tone-mapped (tm.output)"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(tmp / "b.exr"));
+}
+
 TEST(LoomCli, UsageErrorsExitTwo) {
     auto none = runLoom("");
     EXPECT_EQ(none.exitCode, 2);
