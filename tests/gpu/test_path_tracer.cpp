@@ -145,9 +145,13 @@ TEST(PathTracer, FurnaceRoughDielectricNeverGainsEnergy) {
     std::printf("rough dielectric furnace (alpha 0.1): %.4f +- %.4f\n", mean, se);
 }
 
-// A point light over a diffuse plane: L = albedo / pi * I cos(theta) / d^2, exactly (direct
-// lighting only, the light is a delta so NEE has no noise). Compared per pixel.
-TEST(PathTracer, PointLightOverPlaneMatchesAnalyticIrradiance) {
+// Delta lights over a diffuse plane, per pixel (direct lighting only; a delta light has no
+// sampling noise, so each pixel is exact up to float rounding):
+//   point:       L = albedo / pi * I cos(theta) / d^2           (inverse square, cosine)
+//   spot:        the same times Mitsuba's falloff: 1 inside the beam width, linear in angle to
+//                0 at the cutoff, 0 outside
+//   directional: L = albedo / pi * E cos(theta)                 (E = irradiance normal to it)
+TEST(PathTracer, DeltaLightsOverPlaneMatchAnalyticIrradiance) {
     Scene s;
     s.sourceFile = "<plane>";
     s.meshes.push_back(makeRectangle());
@@ -161,34 +165,71 @@ TEST(PathTracer, PointLightOverPlaneMatchesAnalyticIrradiance) {
     plane.toWorld = glm::rotate(glm::mat4(1.0f), glm::radians(-90.0f), glm::vec3(1, 0, 0)) *
                     glm::scale(glm::mat4(1.0f), glm::vec3(2.0f));
     s.shapes.push_back(plane);
+    s.camera = lookAtCamera({0, 3, 2.5f}, {0, 0, 0}, 45.0f);
+
     Light point;
     point.type = LightType::Point;
     point.position = glm::vec3(0.3f, 1.0f, -0.2f);
     point.intensity = glm::vec3(2.0f, 3.0f, 4.0f);
-    s.lights.push_back(point);
-    s.camera = lookAtCamera({0, 3, 2.5f}, {0, 0, 0}, 45.0f);
+    Light spot = point;
+    spot.type = LightType::Spot;
+    spot.position = glm::vec3(-0.2f, 1.5f, 0.1f);
+    spot.direction = glm::normalize(glm::vec3(0.3f, -1.0f, -0.2f));
+    spot.cutoffAngle = 35.0f;
+    spot.beamWidth = 20.0f;
+    Light directional;
+    directional.type = LightType::Directional;
+    directional.direction = glm::normalize(glm::vec3(0.4f, -1.0f, 0.3f));  // of travel
+    directional.intensity = glm::vec3(1.5f, 1.0f, 0.5f);
 
-    Renderer r(sharedGpu(),
-               ptGraph({{"maxBounces", 1}, {"motionBlur", false}, {"samplesPerPixel", 1}}, true),
-               32, 32);
-    r.setScene(s);
-    r.frame();
-    ImageData color = r.readOutput("pt.color");
-    ImageData pos = r.readOutput("gbuf.position");
-    int tested = 0;
-    for (uint32_t i = 0; i < color.width * color.height; ++i) {
-        if (pos.pixels[i * 4 + 3] == 0.0f) continue;  // miss
-        glm::vec3 p(pos.pixels[i * 4], pos.pixels[i * 4 + 1], pos.pixels[i * 4 + 2]);
-        glm::vec3 d = point.position - p;
-        float dist2 = glm::dot(d, d);
-        float cosTheta = std::max(0.0f, glm::normalize(d).y);
-        for (int c = 0; c < 3; ++c) {
-            double expected = m.reflectance[c] / M_PI * point.intensity[c] * cosTheta / dist2;
-            EXPECT_NEAR(color.pixels[i * 4 + c], expected, 1e-4 * expected + 1e-6) << "pixel " << i;
+    for (const Light& light : {point, spot, directional}) {
+        s.lights = {light};
+        Renderer r(sharedGpu(),
+                   ptGraph({{"maxBounces", 1}, {"motionBlur", false}, {"samplesPerPixel", 1}}, true),
+                   32, 32);
+        r.setScene(s);
+        r.frame();
+        ImageData color = r.readOutput("pt.color");
+        ImageData pos = r.readOutput("gbuf.position");
+        int tested = 0, inBeam = 0, inFalloff = 0;
+        for (uint32_t i = 0; i < color.width * color.height; ++i) {
+            if (pos.pixels[i * 4 + 3] == 0.0f) continue;  // miss
+            glm::dvec3 p(pos.pixels[i * 4], pos.pixels[i * 4 + 1], pos.pixels[i * 4 + 2]);
+            glm::dvec3 E;
+            if (light.type == LightType::Directional) {
+                E = glm::dvec3(light.intensity) * std::max(0.0, -double(light.direction.y));
+            } else {
+                glm::dvec3 d = glm::dvec3(light.position) - p;
+                double dist2 = glm::dot(d, d);
+                E = glm::dvec3(light.intensity) * std::max(0.0, glm::normalize(d).y) / dist2;
+                if (light.type == LightType::Spot) {
+                    double angle = std::acos(std::clamp(
+                        glm::dot(-glm::normalize(d), glm::dvec3(light.direction)), -1.0, 1.0));
+                    double cutoff = glm::radians(double(light.cutoffAngle));
+                    double beam = glm::radians(double(light.beamWidth));
+                    double fall = angle >= cutoff ? 0.0
+                                : angle <= beam   ? 1.0
+                                                  : (cutoff - angle) / (cutoff - beam);
+                    // Away from the cutoff and beam edges by float precision.
+                    if (std::abs(angle - cutoff) < 1e-4 || std::abs(angle - beam) < 1e-4) continue;
+                    inBeam += fall == 1.0;
+                    inFalloff += fall > 0.0 && fall < 1.0;
+                    E *= fall;
+                }
+            }
+            for (int c = 0; c < 3; ++c) {
+                double expected = m.reflectance[c] / M_PI * E[c];
+                EXPECT_NEAR(color.pixels[i * 4 + c], expected, 1e-4 * expected + 1e-6)
+                    << "light type " << int(light.type) << ", pixel " << i;
+            }
+            ++tested;
         }
-        ++tested;
+        EXPECT_GT(tested, 500);
+        if (light.type == LightType::Spot) {
+            EXPECT_GT(inBeam, 20);
+            EXPECT_GT(inFalloff, 20);
+        }
     }
-    EXPECT_GT(tested, 500);
 }
 
 // ---------------------------------------------------------------------------------------------
