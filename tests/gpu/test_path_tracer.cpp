@@ -184,9 +184,10 @@ TEST(PathTracer, DeltaLightsOverPlaneMatchAnalyticIrradiance) {
 
     for (const Light& light : {point, spot, directional}) {
         s.lights = {light};
-        Renderer r(sharedGpu(),
-                   ptGraph({{"maxBounces", 1}, {"motionBlur", false}, {"samplesPerPixel", 1}}, true),
-                   32, 32);
+        Renderer r(
+            sharedGpu(),
+            ptGraph({{"maxBounces", 1}, {"motionBlur", false}, {"samplesPerPixel", 1}}, true), 32,
+            32);
         r.setScene(s);
         r.frame();
         ImageData color = r.readOutput("pt.color");
@@ -208,7 +209,7 @@ TEST(PathTracer, DeltaLightsOverPlaneMatchAnalyticIrradiance) {
                     double cutoff = glm::radians(double(light.cutoffAngle));
                     double beam = glm::radians(double(light.beamWidth));
                     double fall = angle >= cutoff ? 0.0
-                                : angle <= beam   ? 1.0
+                                  : angle <= beam ? 1.0
                                                   : (cutoff - angle) / (cutoff - beam);
                     // Away from the cutoff and beam edges by float precision.
                     if (std::abs(angle - cutoff) < 1e-4 || std::abs(angle - beam) < 1e-4) continue;
@@ -331,12 +332,17 @@ Scene polygonScene(const PolygonCase& c) {
     return s;
 }
 
+// A rectangle at height y, x in [x0, x1], z in [z0, z1], emitting downwards.
+std::vector<glm::vec3> ceilingRectangle(float x0, float x1, float z0, float z1, float y) {
+    return {{x0, y, z0}, {x1, y, z0}, {x1, y, z1}, {x0, y, z1}};
+}
+
 const std::vector<PolygonCase>& polygonCases() {
     static const std::vector<PolygonCase> cases = {
         // Facing down at height 0.5: points directly below and far off axis (grazing). Large
         // enough for BSDF sampling to hit it about every other sample.
         {"rectangle overhead",
-         {{-0.8f, 0.5f, -0.8f}, {0.8f, 0.5f, -0.8f}, {0.8f, 0.5f, 0.6f}, {-0.8f, 0.5f, 0.6f}},
+         ceilingRectangle(-0.8f, 0.8f, -0.8f, 0.6f, 0.5f),
          2.0f,
          {0.0f, 2.2f, 3.2f},
          {0.0f, 0.0f, 0.0f},
@@ -361,10 +367,7 @@ const std::vector<PolygonCase>& polygonCases() {
          false},
         // Far and large: 40 x 40 at height 12.
         {"rectangle far",
-         {{-20.0f, 12.0f, -20.0f},
-          {20.0f, 12.0f, -20.0f},
-          {20.0f, 12.0f, 20.0f},
-          {-20.0f, 12.0f, 20.0f}},
+         ceilingRectangle(-20.0f, 20.0f, -20.0f, 20.0f, 12.0f),
          1.0f,
          {0.0f, 2.0f, 3.0f},
          {0.0f, 0.0f, 0.0f},
@@ -373,10 +376,7 @@ const std::vector<PolygonCase>& polygonCases() {
         // Tiny and far (solid angle ~1e-5 sr: the area-sampling fallback); BSDF sampling
         // would almost never hit it.
         {"rectangle tiny far",
-         {{-0.05f, 30.0f, -0.05f},
-          {0.05f, 30.0f, -0.05f},
-          {0.05f, 30.0f, 0.05f},
-          {-0.05f, 30.0f, 0.05f}},
+         ceilingRectangle(-0.05f, 0.05f, -0.05f, 0.05f, 30.0f),
          2e5f,
          {0.0f, 2.0f, 3.0f},
          {0.0f, 0.0f, 0.0f},

@@ -238,8 +238,12 @@ TEST(ReSTIRPT, UnbiasedWithMovingShapes) {
 // destination pixel; unbiased with a static and a moving camera, with and without depth of field.
 TEST(AreaReSTIR, UnbiasedStaticAndMovingCamera) {
     std::string scene = sourcePath("scenes/cornell_box.json");
+    // 48 sequences: at 24 the static case read |z| 3.28 in one coarse region (-1.0%) after the
+    // NEE shadow-ray fix changed every random path; at 48 it is 2.15 (-0.56%), at 96 2.27, so
+    // chance, and the coarse threshold of 3 stays.
     for (float dt : {0.0f, 3.0f}) {
-        auto c = compareWithReference(scene, "area_restir.json", {}, dt);
+        auto c = compareWithReference(scene::loadScene(scene), "area_restir.json", {}, dt, 32,
+                                      std::max(48, defaultSequences()));
         EXPECT_TRUE(c.unbiased()) << "dt " << dt << ": " << c.restir << " vs " << c.reference;
     }
 }

@@ -234,8 +234,15 @@ TEST(LoomCli, OutHdrWritesTheFirstLinearOutput) {
     TempDir tmp("loom-out-hdr");
     std::string graph = std::string(LOOM_SOURCE_DIR) + "/graphs/pt.json";
     std::string scene = std::string(LOOM_SOURCE_DIR) + "/scenes/cornell_box.json";
+    const char* oldLog = std::getenv("LOOM_LOG");
+    std::string savedLog = oldLog ? oldLog : "";
+    ::setenv("LOOM_LOG", "info", 1);  // ctest runs tests at "warning"; the choice is an info line
     auto r = runLoom("render '" + graph + "' --scene '" + scene + "' --width 8 --height 8 --out '" +
                      (tmp / "a.exr") + "'");
+    if (oldLog)
+        ::setenv("LOOM_LOG", savedLog.c_str(), 1);
+    else
+        ::unsetenv("LOOM_LOG");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("(accum.output,"), std::string::npos) << r.out;
     EXPECT_NE(r.err.find("writing the linear output accum.output"), std::string::npos) << r.err;
