@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include "core/gpu/CounterBuffer.h"
 
+#include "core/gpu/CounterBuffer.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 #include "core/util/Log.h"
