@@ -337,54 +337,33 @@ std::vector<glm::vec3> ceilingRectangle(float x0, float x1, float z0, float z1, 
     return {{x0, y, z0}, {x1, y, z0}, {x1, y, z1}, {x0, y, z1}};
 }
 
+// One case per row (the table is easier to read than clang-format's one field per line).
+// clang-format off
 const std::vector<PolygonCase>& polygonCases() {
     static const std::vector<PolygonCase> cases = {
         // Facing down at height 0.5: points directly below and far off axis (grazing). Large
         // enough for BSDF sampling to hit it about every other sample.
-        {"rectangle overhead",
-         ceilingRectangle(-0.8f, 0.8f, -0.8f, 0.6f, 0.5f),
-         2.0f,
-         {0.0f, 2.2f, 3.2f},
-         {0.0f, 0.0f, 0.0f},
-         65.0f,
-         true},
+        {"rectangle overhead", ceilingRectangle(-0.8f, 0.8f, -0.8f, 0.6f, 0.5f), 2.0f,
+         {0.0f, 2.2f, 3.2f}, {0.0f, 0.0f, 0.0f}, 65.0f, true},
         // Tilted triangle whose lowest edge is 0.01 above the floor: points very close to it.
-        {"triangle close",
-         {{-0.4f, 0.01f, 0.0f}, {0.0f, 0.45f, -0.35f}, {0.4f, 0.01f, 0.0f}},
-         3.0f,
-         {0.0f, 0.9f, 1.2f},
-         {0.0f, 0.0f, 0.1f},
-         60.0f,
-         false},
+        {"triangle close", {{-0.4f, 0.01f, 0.0f}, {0.0f, 0.45f, -0.35f}, {0.4f, 0.01f, 0.0f}},
+         3.0f, {0.0f, 0.9f, 1.2f}, {0.0f, 0.0f, 0.1f}, 60.0f, false},
         // Vertical, facing +x: floor points near x = 0 see it almost edge-on (nearly in its
         // plane), points at x < 0 are behind it.
         {"rectangle edge-on",
          {{0.0f, 0.05f, -0.4f}, {0.0f, 0.6f, -0.4f}, {0.0f, 0.6f, 0.4f}, {0.0f, 0.05f, 0.4f}},
-         3.0f,
-         {0.6f, 1.4f, 1.3f},
-         {0.4f, 0.0f, 0.0f},
-         60.0f,
-         false},
+         3.0f, {0.6f, 1.4f, 1.3f}, {0.4f, 0.0f, 0.0f}, 60.0f, false},
         // Far and large: 40 x 40 at height 12.
-        {"rectangle far",
-         ceilingRectangle(-20.0f, 20.0f, -20.0f, 20.0f, 12.0f),
-         1.0f,
-         {0.0f, 2.0f, 3.0f},
-         {0.0f, 0.0f, 0.0f},
-         50.0f,
-         true},
+        {"rectangle far", ceilingRectangle(-20.0f, 20.0f, -20.0f, 20.0f, 12.0f), 1.0f,
+         {0.0f, 2.0f, 3.0f}, {0.0f, 0.0f, 0.0f}, 50.0f, true},
         // Tiny and far (solid angle ~1e-5 sr: the area-sampling fallback); BSDF sampling
         // would almost never hit it.
-        {"rectangle tiny far",
-         ceilingRectangle(-0.05f, 0.05f, -0.05f, 0.05f, 30.0f),
-         2e5f,
-         {0.0f, 2.0f, 3.0f},
-         {0.0f, 0.0f, 0.0f},
-         50.0f,
-         false},
+        {"rectangle tiny far", ceilingRectangle(-0.05f, 0.05f, -0.05f, 0.05f, 30.0f), 2e5f,
+         {0.0f, 2.0f, 3.0f}, {0.0f, 0.0f, 0.0f}, 50.0f, false},
     };
     return cases;
 }
+// clang-format on
 
 // Per-pixel statistics of an estimator against a known expectation.
 struct PixelComparison {
@@ -424,6 +403,38 @@ PixelComparison comparePixels(const std::vector<double>& sum, const std::vector<
     c.relBias = diff / total;
     c.relSe = std::sqrt(var) / total;
     return c;
+}
+
+// Renders frames (one independent estimate each) of r's "pt.color", channel `channel`, until
+// the image mean's relative standard error is below `targetRelSe`, checked every `step` frames
+// from `minFrames` on, or until `maxFrames`.
+struct FrameSchedule {
+    int minFrames, step, maxFrames;
+    double targetRelSe;
+};
+struct FrameStudy {
+    PixelComparison comparison;
+    int frames = 0;
+};
+
+FrameStudy renderUntilPrecise(Renderer& r, int channel, const std::vector<double>& expected,
+                              const std::vector<double>& expectedError, FrameSchedule schedule) {
+    std::vector<double> sum(expected.size(), 0.0), sum2(expected.size(), 0.0);
+    FrameStudy study;
+    while (true) {
+        r.frame();
+        ImageData img = r.readOutput("pt.color");
+        for (size_t i = 0; i < expected.size(); ++i) {
+            double v = img.pixels[i * 4 + channel];
+            sum[i] += v;
+            sum2[i] += v * v;
+        }
+        ++study.frames;
+        if (study.frames < schedule.minFrames || study.frames % schedule.step != 0) continue;
+        study.comparison = comparePixels(sum, sum2, study.frames, expected, expectedError);
+        if (study.comparison.relSe < schedule.targetRelSe || study.frames >= schedule.maxFrames)
+            return study;
+    }
 }
 
 }  // namespace
@@ -495,23 +506,11 @@ TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
                                 {"motionBlur", false}}),
                        kSize, kSize, 11);
             r.setScene(scene);
-            std::vector<double> sum(kSize * kSize, 0.0), sum2(kSize * kSize, 0.0);
-            int frames = 0;
-            PixelComparison c;
             // Frames until the image mean's standard error is below 0.075% (4 SE <= 0.3%).
-            while (true) {
-                r.frame();
-                ImageData img = r.readOutput("pt.color");
-                for (uint32_t i = 0; i < kSize * kSize; ++i) {
-                    double v = img.pixels[i * 4 + 1];
-                    sum[i] += v;
-                    sum2[i] += v * v;
-                }
-                ++frames;
-                if (frames < 32 || frames % 4 != 0) continue;
-                c = comparePixels(sum, sum2, frames, expected, quadrature);
-                if (c.relSe < 7.5e-4 || frames >= 1024) break;
-            }
+            FrameStudy study =
+                renderUntilPrecise(r, 1, expected, quadrature, {32, 4, 1024, 7.5e-4});
+            const PixelComparison& c = study.comparison;
+            int frames = study.frames;
             std::printf(
                 "%-20s %-4s %3d frames x %3d spp, %4d px: rel. bias %+.4f%% (se %.4f%%), "
                 "max |z| %.2f, mean z^2 %.3f, unreached %.1e\n",
@@ -578,23 +577,11 @@ TEST(PathTracer, EmissiveEnclosureMatchesGeometricSeries) {
                                 {"motionBlur", false}}),
                        kSize, kSize, 5);
             r.setScene(s);
-            std::vector<double> sum(kSize * kSize, 0.0), sum2(kSize * kSize, 0.0);
-            int frames = 0;
-            PixelComparison c;
-            while (true) {
-                r.frame();
-                ImageData img = r.readOutput("pt.color");
-                for (uint32_t i = 0; i < kSize * kSize; ++i) {
-                    double v = img.pixels[i * 4];
-                    sum[i] += v;
-                    sum2[i] += v * v;
-                }
-                // Russian roulette makes the per-frame values heavy-tailed: many frames, so
-                // that the standard errors from their spread are reliable.
-                if (++frames < 128 || frames % 8 != 0) continue;
-                c = comparePixels(sum, sum2, frames, expected);
-                if (c.relSe < 5e-4 || frames >= 512) break;
-            }
+            // Russian roulette makes the per-frame values heavy-tailed: many frames, so that
+            // the standard errors from their spread are reliable.
+            FrameStudy study = renderUntilPrecise(r, 0, expected, {}, {128, 8, 512, 5e-4});
+            const PixelComparison& c = study.comparison;
+            int frames = study.frames;
             std::printf(
                 "enclosure n=%-2d rr %-2d %-4s %3d frames: mean %.5f (expected %.5f), rel. bias "
                 "%+.4f%% (se %.4f%%), max |z| %.2f, mean z^2 %.3f\n",
