@@ -1,5 +1,5 @@
 #version 460
-// Test kernel (tests/gpu/test_passes.cpp): output = input (when connected) + step.
+// Test kernel (passes/common/tests/test_common_passes.cpp): output = input (when connected) + step.
 layout(local_size_x = 8, local_size_y = 8) in;
 #if HAS_INPUT
 layout(rgba32f) uniform readonly image2D inputImage;

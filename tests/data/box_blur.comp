@@ -1,5 +1,5 @@
 #version 460
-// Test kernel (tests/gpu/test_passes.cpp): (2r+1)^2 box blur with clamp-to-edge addressing.
+// Test kernel (passes/common/tests/test_common_passes.cpp): (2r+1)^2 box blur with clamp-to-edge addressing.
 // Samples are summed row by row, left to right, so the CPU reference adds in the same order.
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f) uniform readonly image2D inputImage;

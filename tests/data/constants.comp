@@ -1,5 +1,5 @@
 #version 460
-// Test kernel (tests/gpu/test_passes.cpp): copies every ComputePass constant, standard
+// Test kernel (passes/common/tests/test_common_passes.cpp): copies every ComputePass constant, standard
 // push-constant member, define and HAS_<port> flag into a buffer so the test can read them.
 layout(local_size_x = 1) in;
 layout(std430) writeonly buffer Values { float values[]; };

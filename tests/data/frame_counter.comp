@@ -1,5 +1,5 @@
 #version 460
-// Test kernel (tests/gpu/test_passes.cpp): counts frames in a persistent image, restarting
+// Test kernel (passes/common/tests/test_common_passes.cpp): counts frames in a persistent image, restarting
 // when the graph reports fresh history (first frame, resize, recompile).
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(r32f) uniform image2D countImage;  // persistent

@@ -1,5 +1,5 @@
 #version 460
-// Test kernel (tests/gpu/test_passes.cpp): a value that depends on pixel and frame index,
+// Test kernel (passes/common/tests/test_common_passes.cpp): a value that depends on pixel and frame index,
 // plus a constant offset, so Accumulate's mean and variance can be checked on the CPU.
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f) uniform writeonly image2D outputImage;

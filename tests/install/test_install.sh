@@ -22,7 +22,7 @@ render() {
 render
 [ -s out.exr ] || { echo "installed loom wrote no image"; exit 1; }
 # The installed copy's shaders are the ones used: break one and the render must fail.
-echo "this is not GLSL" >> "$prefix/share/loom/shaders/passes/tonemap/tonemap.comp"
+echo "this is not GLSL" >> "$prefix/share/loom/passes/common/tonemap.comp"
 if render 2>err.txt; then echo "installed loom did not use its own shaders"; exit 1; fi
 grep -q "tonemap.comp" err.txt || { echo "error does not name the shader:"; cat err.txt; exit 1; }
 echo "installed loom renders from $work/run with $prefix/share/loom"

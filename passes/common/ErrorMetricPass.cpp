@@ -23,8 +23,8 @@ public:
         r.param("logScale", true).doc("logarithmic false-colour ramp");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPixel = shaders.pipeline("passes/error_metric/error_metric.comp");
-        mReduce = shaders.pipeline("passes/error_metric/reduce.comp");
+        mPixel = shaders.pipeline("passes/common/error_metric.comp");
+        mReduce = shaders.pipeline("passes/common/reduce.comp");
     }
     void execute(ExecuteContext& ctx) override {
         auto img = ctx.texture("image"), ref = ctx.texture("reference");

@@ -1,7 +1,7 @@
 // ReSTIRPTSpatial: spatial path reuse of ReSTIR PT (Lin et al. 2022). See README.md.
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
-#include "passes/ReSTIRPTInitial/PathReservoir.h"
+#include "passes/restir_pt/PathReservoir.h"
 
 namespace loom {
 

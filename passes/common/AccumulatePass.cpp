@@ -18,8 +18,8 @@ public:
         r.persistentTexture("m2", gpu::Format::RGBA32F, "running sum of squared deviations");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/accumulate/accumulate.comp", {{"HAS_VARIANCE", "0"}});
-        mPipelineVar = shaders.pipeline("passes/accumulate/accumulate.comp", {{"HAS_VARIANCE", "1"}});
+        mPipeline = shaders.pipeline("passes/common/accumulate.comp", {{"HAS_VARIANCE", "0"}});
+        mPipelineVar = shaders.pipeline("passes/common/accumulate.comp", {{"HAS_VARIANCE", "1"}});
     }
     void execute(ExecuteContext& ctx) override {
         if (ctx.upstreamChanged() || ctx.historyReset()) mCount = 0;

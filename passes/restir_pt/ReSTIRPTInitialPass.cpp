@@ -2,7 +2,7 @@
 #include "core/gpu/CounterBuffer.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
-#include "passes/ReSTIRPTInitial/PathReservoir.h"
+#include "passes/restir_pt/PathReservoir.h"
 
 namespace loom {
 

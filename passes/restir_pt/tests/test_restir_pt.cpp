@@ -297,7 +297,7 @@ TEST(AreaReSTIR, PrimaryHitReconnectionJacobian) {
          {{{"name", "k"},
            {"type", "ComputePass"},
            {"params",
-            {{"shader", std::string(LOOM_TEST_DATA) + "/restir_lens_jacobian.comp"},
+            {{"shader", std::string(LOOM_SOURCE_DIR) + "/passes/restir_pt/tests/restir_lens_jacobian.comp"},
              {"outputs", {{"result", {{"glsl", "resultImage"}, {"format", "rgba32f"}}}}},
              {"persistent",
               {{"counters", {{"glsl", "RestirCounters"}, {"kind", "buffer"}, {"bytes", 20}}}}}}}}}},
@@ -346,7 +346,7 @@ TEST(ReSTIRPT, FailedShiftInDenominatorIsDetected) {
 
 namespace {
 
-// GBuffer -> ReSTIRPTInitial -> tests/data/restir_shift_check.comp.
+// GBuffer -> ReSTIRPTInitial -> tests/restir_shift_check.comp.
 std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
                                              const std::string& reuse = "path",
                                              double roughnessThreshold = 0.2) {
@@ -361,7 +361,7 @@ std::unique_ptr<RenderGraph> shiftCheckGraph(const std::string& shift,
           {{"name", "check"},
            {"type", "ComputePass"},
            {"params",
-            {{"shader", std::string(LOOM_TEST_DATA) + "/restir_shift_check.comp"},
+            {{"shader", std::string(LOOM_SOURCE_DIR) + "/passes/restir_pt/tests/restir_shift_check.comp"},
              {"inputs",
               {{"reservoirs", {{"glsl", "ReservoirsIn"}, {"kind", "buffer"}}},
                {"primary", {{"glsl", "PrimaryIn"}, {"kind", "buffer"}}}}},
@@ -470,7 +470,7 @@ TEST(ReSTIRPT, JacobianAndMisWeights) {
                {{{"name", "k"},
                  {"type", "ComputePass"},
                  {"params",
-                  {{"shader", std::string(LOOM_TEST_DATA) + "/restir_jacobian.comp"},
+                  {{"shader", std::string(LOOM_SOURCE_DIR) + "/passes/restir_pt/tests/restir_jacobian.comp"},
                    {"outputs",
                     {{"results", {{"glsl", "Results"}, {"kind", "buffer"}, {"bytes", n * 16}}},
                      {"pss", {{"glsl", "PssResults"}, {"kind", "buffer"}, {"bytes", n * 8}}}}},

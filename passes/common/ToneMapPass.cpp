@@ -16,7 +16,7 @@ public:
         r.param("srgb", true).doc("encode with the sRGB transfer function");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/tonemap/tonemap.comp");
+        mPipeline = shaders.pipeline("passes/common/tonemap.comp");
     }
     void execute(ExecuteContext& ctx) override {
         gpu::PushConstants pc(*mPipeline);
