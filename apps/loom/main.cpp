@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "apps/CliArgs.h"
+#include "apps/loom/PassDocs.h"
 #include "core/graph/Renderer.h"
 #include "core/script/Csv.h"
 #include "core/script/LuaBindings.h"
@@ -92,9 +93,13 @@ Loads each graph, checks passes, parameters, edges, formats, cycles and outputs,
 it (cull, order, allocate) at 256x256 without a GPU. Prints OK or the first error per file.
 )";
 
-const char* kPassesHelp = R"(usage: loom passes [--json]
+const char* kPassesHelp = R"(usage: loom passes [--json | --markdown TYPE]
+       loom passes --update-docs FILE... | --check-docs FILE...
 
 Lists every registered pass type with its ports and parameters (type, default, range, doc).
+--markdown prints one type's tables; --update-docs rewrites the blocks between
+'<!-- loom passes TYPE -->' and '<!-- /loom passes -->' in each file with those tables, and
+--check-docs exits 2 naming each block that differs (the READMEs' tables are generated).
 )";
 
 const char* kDevicesHelp = R"(usage: loom devices
@@ -350,6 +355,14 @@ json passesJson() {
                     {"doc", p.doc}};
             if (p.kind == ResourceKind::Texture)
                 pj["format"] = p.format ? gpu::formatName(*p.format) : "any";
+            if (p.previousFrame) pj["previousFrame"] = true;
+            if (p.kind == ResourceKind::Buffer && !p.isInput) {
+                if (p.size.mode == SizeRule::Mode::Fixed)
+                    pj["size"] = {{"bytes", p.size.bytes}};
+                else
+                    pj["size"] = {{"bytesPerPixel", p.size.bytesPerPixel},
+                                  {"extraBytes", p.size.extraBytes}};
+            }
             j[p.isInput ? "inputs" : "outputs"].push_back(pj);
         }
         j["params"] = json::array();
@@ -378,12 +391,31 @@ int cmdPasses(const std::vector<std::string>& args) {
             std::cout << kPassesHelp;
             return 0;
         }
+    }
+    json all = passesJson();
+    if (!args.empty() && (args[0] == "--update-docs" || args[0] == "--check-docs")) {
+        std::vector<std::string> files(args.begin() + 1, args.end());
+        if (files.empty()) throw UsageError("passes: " + args[0] + " needs README files");
+        bool check = args[0] == "--check-docs";
+        int n = updatePassDocs(all, files, check);
+        if (!check) std::printf("%d table block(s) updated\n", n);
+        return check && n ? 2 : 0;
+    }
+    if (!args.empty() && args[0] == "--markdown") {
+        if (args.size() != 2) throw UsageError("passes: --markdown needs one pass TYPE");
+        for (auto& p : all)
+            if (p["type"] == args[1]) {
+                std::cout << passTablesMarkdown(p);
+                return 0;
+            }
+        throw UserError("passes: unknown pass type '" + args[1] + "'");
+    }
+    for (auto& a : args) {
         if (a == "--json")
             asJson = true;
         else
             throw UsageError("passes: unknown option '" + a + "'");
     }
-    json all = passesJson();
     if (asJson) {
         std::cout << all.dump(2) << "\n";
         return 0;

@@ -110,6 +110,12 @@ public:
     PushConstants& setUints(const std::string& member, const uint32_t* v, uint32_t count);
     PushConstants& setInts(const std::string& member, const int32_t* v, uint32_t count);
     const std::vector<uint8_t>& bytes() const { return mBytes; }
+    // The whole block at once (KernelParams fills it by reflected member).
+    void setBytes(const std::vector<uint8_t>& bytes) {
+        size_t n = mBytes.size();
+        mBytes = bytes;
+        mBytes.resize(n);
+    }
 
 private:
     const ReflectedMember& member(const std::string& name, const char* expectedBase,

@@ -1,4 +1,5 @@
 #include "core/graph/Pass.h"
+#include "core/shader/ShaderEnums.h"
 
 #include <cmath>
 #include <filesystem>
@@ -90,6 +91,11 @@ PassReflection::ParamBuilder PassReflection::paramEnum(const std::string& name,
                                                        const std::string& def,
                                                        std::vector<std::string> choices) {
     return addParam({name, ParamType::Enum, def, {}, {}, std::move(choices), ""});
+}
+PassReflection::ParamBuilder PassReflection::paramEnum(const std::string& name,
+                                                       const std::string& def,
+                                                       const ShaderEnum& shared) {
+    return addParam({name, ParamType::Enum, def, {}, {}, shared.choices, "", shared.prefix});
 }
 PassReflection::ParamBuilder PassReflection::paramVec(const std::string& name,
                                                       std::vector<double> def) {

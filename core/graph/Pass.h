@@ -11,6 +11,7 @@
 
 #include "core/gpu/Context.h"
 #include "core/shader/ShaderCompiler.h"
+#include "core/shader/ShaderEnums.h"
 #include "core/util/JsonSource.h"
 
 namespace loom {
@@ -52,6 +53,9 @@ struct ParamDesc {
     std::optional<double> min, max;     // numeric (per component for vectors)
     std::vector<std::string> choices;   // Enum
     std::string doc;
+    // Enum over a registered ShaderEnum: its define prefix (every kernel has the defines);
+    // "" = this pass's own enum, whose `<PARAM>_<CHOICE>` defines only its kernels get.
+    std::string shaderEnum;
 };
 
 struct PersistentDesc {
@@ -122,6 +126,8 @@ public:
     ParamBuilder param(const std::string& name, const char* def);
     ParamBuilder paramEnum(const std::string& name, const std::string& def,
                            std::vector<std::string> choices);
+    ParamBuilder paramEnum(const std::string& name, const std::string& def,
+                           const ShaderEnum& shared);
     ParamBuilder paramVec(const std::string& name, std::vector<double> def);
     ParamBuilder paramJson(const std::string& name, json def);
     ParamBuilder addParam(ParamDesc param);

@@ -72,6 +72,12 @@ bool ExecuteContext::has(const std::string& port) const {
     return mTextures.count(port) || mBuffers.count(port);
 }
 
+std::string ExecuteContext::portOf(const gpu::Buffer* buffer) const {
+    for (auto& [port, b] : mBuffers)
+        if (b.get() == buffer) return port;
+    return "";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Loading and saving
 

@@ -71,6 +71,8 @@ public:
     std::shared_ptr<gpu::Image> persistentTexture(const std::string& name) const;
     std::shared_ptr<gpu::Buffer> persistentBuffer(const std::string& name) const;
     bool has(const std::string& port) const;
+    // The port (or persistent resource) a buffer is bound to in this pass, "" if none.
+    std::string portOf(const gpu::Buffer* buffer) const;
     uint32_t width() const { return mWidth; }
     uint32_t height() const { return mHeight; }
     uint64_t frameIndex() const { return mFrameIndex; }

@@ -1,4 +1,5 @@
 #include "core/shader/ShaderCompiler.h"
+#include "core/shader/ShaderEnums.h"
 
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
@@ -261,8 +262,10 @@ std::string ShaderCompiler::cacheKey(const std::string& resolvedPath, const Shad
 std::shared_ptr<const CompiledShader> ShaderCompiler::compile(const std::string& pathIn,
                                                               const ShaderDefines& localDefines) {
     std::string path = resolve(pathIn);
-    // Global defines (LOOM_SHADER_DEFINES) under the shader's own: part of every key.
-    ShaderDefines defines = mGlobalDefines;
+    // Registered shader enums, then global defines (LOOM_SHADER_DEFINES), then the shader's
+    // own: all part of every key.
+    ShaderDefines defines = ShaderEnumRegistry::instance().defines();
+    for (const auto& [k, v] : mGlobalDefines) defines[k] = v;
     for (const auto& [k, v] : localDefines) defines[k] = v;
     std::string mkey = memoryKey(path, defines);
     {

@@ -576,6 +576,16 @@ private:
                 allMembersReadonly = allMembersReadonly && md && md->nonWritable;
             }
             b.readonly = b.readonly || allMembersReadonly;
+            b.members = reflectMembers(typeId, b.blockSize);
+            if (!t->operands.empty()) {
+                const TypeInfo* last = type(t->operands.back());
+                if (last && last->opcode == spv::OpTypeRuntimeArray) {
+                    const Decorations* md = memberDecorations(typeId, uint32_t(t->operands.size() - 1));
+                    const Decorations* ad = decorations(t->operands.back());
+                    b.runtimeArrayOffset = md && md->offset ? *md->offset : 0;
+                    b.runtimeArrayStride = ad && ad->arrayStride ? *ad->arrayStride : 0;
+                }
+            }
         } else if (opcode == spv::OpTypeImage) {
             const uint32_t dim = typeOperand(*t, 1);
             const uint32_t sampled = typeOperand(*t, 5);
@@ -597,27 +607,31 @@ private:
         return b;
     }
 
-    ReflectedPushConstants reflectPushConstants(const Variable& var) const {
-        ReflectedPushConstants pc;
-        const uint32_t typeId = pointee(var);
-        pc.blockName = name(typeId);
+    // Members of a block type with their offsets, sizes and types; `size` gets the block's
+    // extent (runtime arrays count 0).
+    std::vector<ReflectedMember> reflectMembers(uint32_t typeId, uint32_t& size) const {
+        std::vector<ReflectedMember> members;
         const TypeInfo* t = type(typeId);
-        if (!t || t->opcode != spv::OpTypeStruct) {
-            return pc;
-        }
+        if (!t || t->opcode != spv::OpTypeStruct) return members;
         for (uint32_t i = 0; i < t->operands.size(); ++i) {
             const Decorations* md = memberDecorations(typeId, i);
             ReflectedMember m;
             auto nameIt = mMemberNames.find(memberKey(typeId, i));
-            if (nameIt != mMemberNames.end()) {
-                m.name = nameIt->second;
-            }
+            if (nameIt != mMemberNames.end()) m.name = nameIt->second;
             m.offset = md && md->offset ? *md->offset : 0;
             m.size = sizeOf(t->operands[i], md, 0);
             m.type = typeName(t->operands[i]);
-            pc.size = std::max(pc.size, m.offset + m.size);
-            pc.members.push_back(std::move(m));
+            size = std::max(size, m.offset + m.size);
+            members.push_back(std::move(m));
         }
+        return members;
+    }
+
+    ReflectedPushConstants reflectPushConstants(const Variable& var) const {
+        ReflectedPushConstants pc;
+        const uint32_t typeId = pointee(var);
+        pc.blockName = name(typeId);
+        pc.members = reflectMembers(typeId, pc.size);
         return pc;
     }
 

@@ -20,6 +20,15 @@ enum class DescriptorKind {
     Unknown
 };
 
+struct ReflectedMember {
+    std::string name;
+    uint32_t offset = 0;
+    uint32_t size = 0;
+    // "float","int","uint","bool","vec2","vec3","vec4","ivec2","ivec3","ivec4",
+    // "uvec2","uvec3","uvec4","mat4","other"
+    std::string type;
+};
+
 struct ReflectedBinding {
     std::string name;       // instance (variable) name if non-empty, else the block/type name
     std::string blockName;  // struct type name for buffer blocks ("" otherwise)
@@ -30,16 +39,14 @@ struct ReflectedBinding {
     // Storage images only: "rgba32f","rgba16f","r32f","r32ui","rg32f","rgba8","r32i","rg16f",
     // "unknown"; empty for every other kind.
     std::string imageFormat;
+    // Buffer blocks: the members (uniform blocks are filled like push constants), and for a
+    // block that ends in a runtime array, the byte offset of that array and its element stride
+    // (what a buffer's declared header and per-element sizes are checked against).
+    std::vector<ReflectedMember> members;
+    uint32_t blockSize = 0;  // max(offset + size) over sized members
+    uint32_t runtimeArrayOffset = 0, runtimeArrayStride = 0;  // stride 0: no runtime array
 };
 
-struct ReflectedMember {
-    std::string name;
-    uint32_t offset = 0;
-    uint32_t size = 0;
-    // "float","int","uint","bool","vec2","vec3","vec4","ivec2","ivec3","ivec4",
-    // "uvec2","uvec3","uvec4","mat4","other"
-    std::string type;
-};
 
 struct ReflectedPushConstants {
     std::string blockName;

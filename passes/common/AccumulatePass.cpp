@@ -1,5 +1,6 @@
 // Accumulate: running mean and per-pixel variance over frames; resets when anything upstream
 // changes (parameters, graph, size, camera). See README.md.
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 
 namespace loom {
@@ -18,8 +19,9 @@ public:
         r.persistentTexture("m2", gpu::Format::RGBA32F, "running sum of squared deviations");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/common/accumulate.comp", {{"HAS_VARIANCE", "0"}});
-        mPipelineVar = shaders.pipeline("passes/common/accumulate.comp", {{"HAS_VARIANCE", "1"}});
+        const char* kernel = "passes/common/accumulate.comp";
+        mPipeline = compileKernel(*this, shaders, kernel, {{"HAS_VARIANCE", "0"}});
+        mPipelineVar = compileKernel(*this, shaders, kernel, {{"HAS_VARIANCE", "1"}});
     }
     void execute(ExecuteContext& ctx) override {
         if (ctx.upstreamChanged() || ctx.historyReset()) mCount = 0;
@@ -36,13 +38,10 @@ public:
             .set("outputImage", ctx.texture("output"));
         if (variance) b.set("varianceImage", variance);
         // Frozen (maxFrames reached): the kernel reports the converged mean and variance.
-        gpu::PushConstants pc(pipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        pc.setUints("frameSize", size, 2)
+        KernelParams(*this, pipeline, ctx)
             .set("count", mCount)
-            .set("accumulate", uint32_t(enabled))
-            .set("frozen", uint32_t(frozen));
-        ctx.cmd().dispatchThreads(pipeline, b, &pc, ctx.width(), ctx.height());
+            .set("frozen", uint32_t(frozen))
+            .dispatch(ctx, b, ctx.width(), ctx.height());
         if (enabled && !frozen) ++mCount;
     }
     std::map<std::string, double> stats() const override { return {{"frames", double(mCount)}}; }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 
@@ -260,7 +261,7 @@ public:
         for (auto& [k, v] : defines) key += k + "=" + v + ";";
         auto& pipeline = mPipelines[key];
         if (!pipeline) {
-            pipeline = ctx.shaders().pipeline(shaderPath(ctx.shaders()), defines);
+            pipeline = compileKernel(*this, ctx.shaders(), shaderPath(ctx.shaders()), defines);
             checkInterface(*pipeline);
         }
 
@@ -279,25 +280,8 @@ public:
             else b.set(p.glsl, ctx.persistentBuffer(p.port));
         }
 
-        // Standard members are filled when the shader declares them.
-        gpu::PushConstants pc(*pipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        if (pc.has("frameSize")) pc.setUints("frameSize", size, 2);
-        if (pc.has("frameIndex")) pc.set("frameIndex", uint32_t(ctx.frameIndex()));
-        if (pc.has("seed")) pc.set("seed", ctx.seed());
-        if (pc.has("historyReset")) pc.set("historyReset", uint32_t(ctx.historyReset()));
-        for (auto& c : mConstants) {
-            json v = getParam(c.name);
-            if (c.glslType == "float") pc.set(c.name, v.get<float>());
-            else if (c.glslType == "int") pc.set(c.name, v.get<int32_t>());
-            else if (c.glslType == "uint") pc.set(c.name, v.get<uint32_t>());
-            else if (c.glslType == "bool") pc.set(c.name, uint32_t(v.get<bool>()));
-            else {
-                std::vector<float> f;
-                for (auto& x : v) f.push_back(x.get<float>());
-                pc.set(c.name, f.data(), uint32_t(f.size()));
-            }
-        }
+        // Standard members, then the declared constants, by name (KernelParams.h).
+        KernelParams params(*this, *pipeline, ctx);
 
         // Dispatch size.
         uint32_t threads[3] = {ctx.width(), ctx.height(), 1};
@@ -316,7 +300,7 @@ public:
                 throw UserError("'dispatch' names port '" + port + "', which has no resource");
             }
         }
-        ctx.cmd().dispatchThreads(*pipeline, b, &pc, threads[0], threads[1], threads[2]);
+        params.dispatch(ctx, b, threads[0], threads[1], threads[2]);
     }
 
 private:
@@ -360,15 +344,19 @@ private:
                                     p.glsl + "' as " + rb->imageFormat);
             }
         }
-        const auto& pcs = refl.pushConstants;
+        std::vector<const ReflectedMember*> members;
+        if (refl.pushConstants)
+            for (auto& x : refl.pushConstants->members) members.push_back(&x);
+        if (const ReflectedBinding* ub = refl.find(KernelParams::kUniformBlock))
+            for (auto& x : ub->members) members.push_back(&x);
         for (auto& c : mConstants) {
             const ReflectedMember* m = nullptr;
-            if (pcs)
-                for (auto& x : pcs->members)
-                    if (x.name == c.name) m = &x;
+            for (auto* x : members)
+                if (x->name == c.name) m = x;
             if (!m)
                 throw UserError("constant '" + c.name +
-                                "' is not a member of the shader's push_constant block");
+                                "' is not a member of the shader's push_constant block or of "
+                                "its uniform block PassParams");
             bool ok = m->type == c.glslType || (c.glslType == "bool" && m->type == "uint");
             if (!ok)
                 throw UserError("constant '" + c.name + "' is declared " + c.glslType +

@@ -2,6 +2,7 @@
 // image and its false-colour view. The scalar is read back after the frame (stats()).
 #include <cmath>
 
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/image/Image.h"
 #include "core/util/Log.h"
@@ -23,8 +24,8 @@ public:
         r.param("logScale", true).doc("logarithmic false-colour ramp");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPixel = shaders.pipeline("passes/common/error_metric.comp");
-        mReduce = shaders.pipeline("passes/common/reduce.comp");
+        mPixel = compileKernel(*this, shaders, "passes/common/error_metric.comp");
+        mReduce = compileKernel(*this, shaders, "passes/common/reduce.comp");
     }
     void execute(ExecuteContext& ctx) override {
         auto img = ctx.texture("image"), ref = ctx.texture("reference");
@@ -38,26 +39,17 @@ public:
                                         "render at the images' size",
                                         img->width(), img->height(), ctx.width(), ctx.height()));
         Metric m = parseMetric(param<std::string>("metric"));
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        gpu::PushConstants pc(*mPixel);
-        pc.setUints("frameSize", size, 2)
-            .set("metric", uint32_t(m))
-            .set("epsilon", float(param<double>("epsilon")))
-            .set("falseColorMax", float(param<double>("falseColorMax")))
-            .set("logScale", uint32_t(param<bool>("logScale")));
         gpu::Bindings b;
         b.set("inputImage", img)
             .set("referenceImage", ref)
             .set("perPixelImage", ctx.texture("perPixel"))
             .set("errorImage", ctx.texture("error"));
-        ctx.cmd().dispatchThreads(*mPixel, b, &pc, ctx.width(), ctx.height());
+        KernelParams(*this, *mPixel, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
         ctx.cmd().barrier();
-        gpu::PushConstants rpc(*mReduce);
-        rpc.setUints("frameSize", size, 2);
         gpu::Bindings rb;
         mValue = ctx.buffer("value");
         rb.set("perPixelImage", ctx.texture("perPixel")).set("Result", mValue);
-        ctx.cmd().dispatch(*mReduce, rb, &rpc, 1);
+        KernelParams(*this, *mReduce, ctx).dispatchGroups(ctx, rb, 1);
         mMetric = m;
     }
     void frameCompleted(gpu::Context& gpu) override {

@@ -1,6 +1,7 @@
 // ToneMap: HDR radiance -> display values (exposure, operator, sRGB encode). See README.md.
 #include <cmath>
 
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 
 namespace loom {
@@ -16,19 +17,14 @@ public:
         r.param("srgb", true).doc("encode with the sRGB transfer function");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/common/tonemap.comp");
+        mPipeline = compileKernel(*this, shaders, "passes/common/tonemap.comp");
     }
     void execute(ExecuteContext& ctx) override {
-        gpu::PushConstants pc(*mPipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        std::string op = param<std::string>("operator");
-        pc.setUints("frameSize", size, 2)
-            .set("exposureScale", float(std::exp2(param<double>("exposure"))))
-            .set("op", uint32_t(op == "clamp" ? 0 : op == "reinhard" ? 1 : 2))
-            .set("srgb", uint32_t(param<bool>("srgb")));
         gpu::Bindings b;
         b.set("inputImage", ctx.texture("input")).set("outputImage", ctx.texture("output"));
-        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+        KernelParams(*this, *mPipeline, ctx)
+            .set("exposureScale", float(std::exp2(param<double>("exposure"))))
+            .dispatch(ctx, b, ctx.width(), ctx.height());
     }
 
 private:

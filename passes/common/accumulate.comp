@@ -11,7 +11,7 @@ layout(rgba32f) uniform writeonly image2D varianceImage;
 layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint count;       // frames already in the mean (0 = reset)
-    uint accumulate;  // 0: pass the input through (still reporting count 1)
+    uint enabled;     // 0: pass the input through (still reporting count 1)
     uint frozen;      // maxFrames reached: report the stored mean and variance unchanged
 } pc;
 
@@ -26,7 +26,7 @@ void main() {
         n = float(pc.count);
     } else {
         vec4 x = imageLoad(inputImage, p);
-        if (pc.accumulate != 0u && pc.count > 0u) {
+        if (pc.enabled != 0u && pc.count > 0u) {
             mean = imageLoad(meanImage, p);
             m2 = imageLoad(m2Image, p);
             n = float(pc.count) + 1.0;

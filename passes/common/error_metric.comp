@@ -9,7 +9,7 @@ layout(r32f) uniform writeonly image2D perPixelImage;
 layout(rgba32f) uniform writeonly image2D errorImage;
 layout(push_constant) uniform Params {
     uvec2 frameSize;
-    uint metric;  // 0 mse, 1 relmse, 2 rmse, 3 mape
+    uint metric;  // METRIC_MSE, METRIC_RELMSE, METRIC_RMSE, METRIC_MAPE
     float epsilon;
     float falseColorMax;
     uint logScale;
@@ -22,8 +22,8 @@ void main() {
     vec3 r = imageLoad(referenceImage, p).rgb;
     vec3 d = x - r;
     vec3 e;
-    if (pc.metric == 1u) e = d * d / (r * r + pc.epsilon);
-    else if (pc.metric == 3u) e = abs(d) / (abs(r) + pc.epsilon);
+    if (pc.metric == METRIC_RELMSE) e = d * d / (r * r + pc.epsilon);
+    else if (pc.metric == METRIC_MAPE) e = abs(d) / (abs(r) + pc.epsilon);
     else e = d * d;
     float v = (e.r + e.g + e.b) / 3.0;
     imageStore(perPixelImage, p, vec4(v));

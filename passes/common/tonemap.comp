@@ -8,7 +8,7 @@ layout(rgba32f) uniform writeonly image2D outputImage;
 layout(push_constant) uniform Params {
     uvec2 frameSize;
     float exposureScale;  // 2^exposure
-    uint op;              // 0 clamp, 1 reinhard, 2 aces
+    uint operator;        // OPERATOR_CLAMP, OPERATOR_REINHARD, OPERATOR_ACES
     uint srgb;
 } pc;
 
@@ -17,8 +17,8 @@ void main() {
     if (any(greaterThanEqual(uvec2(p), pc.frameSize))) return;
     vec4 c = imageLoad(inputImage, p);
     vec3 v = c.rgb * pc.exposureScale;
-    if (pc.op == 1u) v = tonemap_reinhard(v);
-    else if (pc.op == 2u) v = tonemap_aces(v);
+    if (pc.operator == OPERATOR_REINHARD) v = tonemap_reinhard(v);
+    else if (pc.operator == OPERATOR_ACES) v = tonemap_aces(v);
     v = clamp(v, 0.0, 1.0);
     if (pc.srgb != 0u) v = linear_to_srgb(v);
     imageStore(outputImage, p, vec4(v, 1.0));

@@ -1,5 +1,6 @@
 // GBuffer: V-buffer of the primary hits plus depth, normals, albedo, roughness, motion vectors
 // and the film/lens sample of each pixel. See README.md.
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 
@@ -35,20 +36,13 @@ public:
         r.param("motionBlur", false).doc("sample time over the camera shutter");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/gbuffer/gbuffer.comp");
+        mPipeline = compileKernel(*this, shaders, "passes/gbuffer/gbuffer.comp");
     }
     void execute(ExecuteContext& ctx) override {
         gpu::Bindings b;
         ctx.scene().bind(b);
         for (const auto& o : kOutputs) b.set(o.glsl, ctx.texture(o.port));
-        gpu::PushConstants pc(*mPipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        pc.setUints("frameSize", size, 2)
-            .set("frameIndex", uint32_t(ctx.frameIndex()))
-            .set("seed", ctx.seed())
-            .set("jitter", uint32_t(param<bool>("jitter")))
-            .set("motionBlur", uint32_t(param<bool>("motionBlur")));
-        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+        KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
 
 private:

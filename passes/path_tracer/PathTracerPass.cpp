@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "core/gpu/CounterBuffer.h"
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 #include "core/util/Log.h"
@@ -32,7 +33,7 @@ public:
         r.param("rrDepth", 5).range(1, 64).doc("Russian roulette after this many bounces");
         r.paramEnum("strategy", "mis", {"mis", "bsdf", "nee"})
             .doc("NEE+BSDF with MIS, BSDF sampling only, or light sampling only");
-        r.paramEnum("misHeuristic", "power", {"balance", "power"}).doc("Veach 1997 Sec. 9.2");
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC")).doc("Veach 1997 Sec. 9.2");
         r.param("motionBlur", true).doc("sample time over the camera shutter");
         r.param("clamp", 0.0).min(0).doc("clamp path radiance (0 = off; biased, previews only)");
     }
@@ -44,7 +45,7 @@ public:
             for (auto& c : name) c = char(std::toupper(c));
             defines[name] = std::string(ctx.has(port) ? "1" : "0");
         }
-        auto pipeline = ctx.shaders().pipeline("passes/path_tracer/path_tracer.comp", defines);
+        auto pipeline = compileKernel(*this, ctx.shaders(), "passes/path_tracer/path_tracer.comp", defines);
         auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         scene.bind(b);
@@ -57,8 +58,6 @@ public:
                                   {"vbuffer", "vbufferImage"},
                                   {"sample", "sampleImage"}})
             if (ctx.has(port)) b.set(glsl, ctx.texture(port));
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        std::string strategy = param<std::string>("strategy");
         uint32_t spp = uint32_t(param<int>("samplesPerPixel"));
         uint32_t maxBounces = uint32_t(param<int>("maxBounces"));
         // lavapipe stops a loop after 65535 iterations per invocation (bvh.glsl): split the
@@ -67,23 +66,11 @@ public:
         constexpr uint32_t kStepsPerRay = 64, kStepBudget = 32768;
         uint32_t perDispatch = std::max(1u, kStepBudget / (2 * (maxBounces + 1) * kStepsPerRay));
         for (uint32_t base = 0; base < spp; base += perDispatch) {
-            gpu::PushConstants pc(*pipeline);
-            pc.setUints("frameSize", size, 2)
-                .set("frameIndex", uint32_t(ctx.frameIndex()))
-                .set("seed", ctx.seed())
-                .set("spp", std::min(perDispatch, spp - base))
-                .set("sampleBase", base)
-                .set("sppTotal", spp)
-                .set("maxBounces", maxBounces)
-                .set("rrDepth", uint32_t(param<int>("rrDepth")))
-                .set("strategy", uint32_t(strategy == "mis"    ? 0
-                                          : strategy == "bsdf" ? 1
-                                                               : 2))
-                .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
-                .set("motionBlur", uint32_t(param<bool>("motionBlur")))
-                .set("clampValue", float(param<double>("clamp")));
             if (base > 0) ctx.cmd().barrier();
-            ctx.cmd().dispatchThreads(*pipeline, b, &pc, ctx.width(), ctx.height());
+            KernelParams(*this, *pipeline, ctx)
+                .set("dispatchSamples", std::min(perDispatch, spp - base))
+                .set("sampleBase", base)
+                .dispatch(ctx, b, ctx.width(), ctx.height());
         }
     }
     void frameCompleted(gpu::Context& gpu) override {

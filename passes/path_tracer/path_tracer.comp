@@ -37,23 +37,23 @@ layout(std430) buffer RayCounter {
     uint max_bvh_iterations;
 };
 
-const uint STRATEGY_MIS = 0u;   // NEE + BSDF sampling, MIS
-const uint STRATEGY_BSDF = 1u;  // BSDF sampling only (emitters hit by chance)
-const uint STRATEGY_NEE = 2u;   // light sampling only for non-delta vertices
+// strategy (generated defines): STRATEGY_MIS = NEE + BSDF sampling with MIS, STRATEGY_BSDF =
+// BSDF sampling only (emitters hit by chance), STRATEGY_NEE = light sampling only for non-delta
+// vertices. Members are filled by name from PathTracer's declared parameters (KernelParams.h).
 
 layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint frameIndex;
     uint seed;
-    uint spp;          // samples in this dispatch
+    uint dispatchSamples;  // samples in this dispatch
     uint sampleBase;   // samples of this frame taken by earlier dispatches (0: the first)
-    uint sppTotal;     // samples of this frame over all its dispatches
+    uint samplesPerPixel;  // samples of this frame over all its dispatches
     uint maxBounces;   // scattering events; 1 = direct lighting only
     uint rrDepth;      // Russian roulette starts after this many bounces
     uint strategy;
     uint misHeuristic;
     uint motionBlur;   // sample time over the shutter
-    float clampValue;  // 0 = off; biased firefly clamp for previews only
+    float clamp;       // 0 = off; biased firefly clamp for previews only
 } pc;
 
 void main() {
@@ -65,7 +65,7 @@ void main() {
     vec3 sum = vec3(0.0), sum_direct = vec3(0.0);
     vec3 first_albedo = vec3(0.0), first_normal = vec3(0.0);
     uint rays = 0u;
-    for (uint s = 0u; s < pc.spp; ++s) {
+    for (uint s = 0u; s < pc.dispatchSamples; ++s) {
         // Camera ray: jittered film position, lens sample, shutter time.
         vec2 uv = (vec2(pixel) + rng_next2(rng)) / vec2(pc.frameSize);
         vec2 u_lens = rng_next2(rng);
@@ -174,14 +174,14 @@ void main() {
             }
             if (all(equal(beta, vec3(0.0)))) break;
         }
-        if (pc.clampValue > 0.0) L = min(L, vec3(pc.clampValue));
+        if (pc.clamp > 0.0) L = min(L, vec3(pc.clamp));
         sum += L;
         sum_direct += L_direct;
     }
     atomicAdd(ray_count, rays);
     atomicMax(max_bvh_iterations, bvh_iterations);
     // This dispatch's share of the frame's mean, added to the earlier dispatches'.
-    float inv = 1.0 / float(pc.sppTotal);
+    float inv = 1.0 / float(pc.samplesPerPixel);
     bool first = pc.sampleBase == 0u;
     ivec2 ip = ivec2(pixel);
     vec4 zero = vec4(0.0);

@@ -8,6 +8,7 @@
 
 #include "core/gpu/Context.h"
 #include "core/gpu/CounterBuffer.h"
+#include "core/graph/KernelParams.h"
 
 namespace loom::restir {
 
@@ -15,15 +16,8 @@ constexpr uint64_t kSettingsBytes = 32;    // RestirSettings header of a reservo
 constexpr uint64_t kReservoirBytes = 112;  // PathReservoir
 constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 
-// Area ReSTIR depth-of-field shift mappings (parameter `dofShift` of the reuse passes) as the
-// kernels' SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits (path_reuse.glsl).
-inline const std::vector<std::string>& dofShiftValues() {
-    static const std::vector<std::string> values = {"both", "copy", "reconnect"};
-    return values;
-}
-inline uint32_t dofShiftBits(const std::string& v) {
-    return v == "both" ? 3u : v == "copy" ? 1u : 2u;
-}
+// The element sizes above are checked against the kernels' SPIR-V strides when they bind the
+// buffers (KernelParams). Shared enums (SHIFT, DOF_SHIFT) are registered in PathReservoir.cpp.
 
 // Shift attempt/success and ray counters (RestirCounters in path_shift.glsl), exposed as pass
 // stats.

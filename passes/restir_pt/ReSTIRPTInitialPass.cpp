@@ -24,7 +24,7 @@ public:
             .doc(
                 "Russian roulette from this vertex on, after the reconnection vertex only "
                 "(PathTracer's rrDepth)");
-        r.paramEnum("shift", "hybrid", {"hybrid", "reconnection", "replay"})
+        r.paramEnum("shift", "hybrid", shaderEnum("SHIFT"))
             .doc("shift mapping used by all later reuse (Lin et al. Sec. 6)");
         r.param("roughnessThreshold", 0.2)
             .range(0, 1)
@@ -34,7 +34,7 @@ public:
         r.param("distanceThreshold", 0.1)
             .min(0)
             .doc("hybrid shift: minimum reconnection segment length (near-field distance)");
-        r.paramEnum("misHeuristic", "power", {"balance", "power"})
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
             .doc("NEE/BSDF MIS inside a path, as PathTracer");
         r.paramEnum("reuse", "path", {"path", "area"})
             .doc(
@@ -42,7 +42,7 @@ public:
                 "samples are part of the sample and are reused too (Area ReSTIR)");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/restir_pt/initial.comp");
+        mPipeline = compileKernel(*this, shaders, "passes/restir_pt/initial.comp");
     }
     void execute(ExecuteContext& ctx) override {
         auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
@@ -53,23 +53,7 @@ public:
             .set("ReservoirsOut", ctx.buffer("reservoirs"))
             .set("PrimaryOut", ctx.buffer("primary"))
             .set("RayCounter", rayCounter);
-        std::string shift = param<std::string>("shift");
-        gpu::PushConstants pc(*mPipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        pc.setUints("frameSize", size, 2)
-            .set("frameIndex", uint32_t(ctx.frameIndex()))
-            .set("seed", ctx.seed())
-            .set("candidates", uint32_t(param<int>("candidates")))
-            .set("maxBounces", uint32_t(param<int>("maxBounces")))
-            .set("shift", uint32_t(shift == "hybrid"         ? 0
-                                   : shift == "reconnection" ? 1
-                                                             : 2))
-            .set("roughThreshold", float(param<double>("roughnessThreshold")))
-            .set("distThreshold", float(param<double>("distanceThreshold")))
-            .set("misHeuristic", uint32_t(param<std::string>("misHeuristic") == "power"))
-            .set("area", uint32_t(param<std::string>("reuse") == "area"))
-            .set("rrDepth", uint32_t(param<int>("rrDepth")));
-        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+        KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mRayCounter.read(gpu); }
     std::map<std::string, double> stats() const override {

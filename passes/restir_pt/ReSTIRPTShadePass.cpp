@@ -1,4 +1,5 @@
 // ReSTIRPTShade: the ReSTIR PT pixel estimate from the final path reservoirs. See README.md.
+#include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 
@@ -13,7 +14,7 @@ public:
         r.param("emission", true).doc("add emission seen at the primary hit (and the environment)");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/restir_pt/shade.comp");
+        mPipeline = compileKernel(*this, shaders, "passes/restir_pt/shade.comp");
     }
     void execute(ExecuteContext& ctx) override {
         gpu::Bindings b;
@@ -21,10 +22,7 @@ public:
         b.set("ReservoirsIn", ctx.buffer("reservoirs"))
             .set("PrimaryIn", ctx.buffer("primary"))
             .set("colorImage", ctx.texture("color"));
-        gpu::PushConstants pc(*mPipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        pc.setUints("frameSize", size, 2).set("emission", uint32_t(param<bool>("emission")));
-        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+        KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
 
 private:

@@ -22,13 +22,13 @@ public:
             .doc(
                 "resampling MIS: defensive pairwise (default), pairwise, or the generalized "
                 "balance heuristic over all techniques (k^2 + k shifts, copy shift only)");
-        r.paramEnum("dofShift", "both", restir::dofShiftValues())
+        r.paramEnum("dofShift", "both", shaderEnum("DOF_SHIFT"))
             .doc(
                 "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
                 "both combined by MIS (Zhang et al. 2024, Sec. 6)");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/restir_pt/spatial.comp");
+        mPipeline = compileKernel(*this, shaders, "passes/restir_pt/spatial.comp");
     }
     void execute(ExecuteContext& ctx) override {
         int rounds = param<int>("rounds");
@@ -46,19 +46,9 @@ public:
                 .set("ReservoirsOut", dst)
                 .set("PrimaryIn", ctx.buffer("primary"))
                 .set("RestirCounters", counters);
-            gpu::PushConstants pc(*mPipeline);
-            uint32_t size[2] = {ctx.width(), ctx.height()};
-            pc.setUints("frameSize", size, 2)
-                .set("frameIndex", uint32_t(ctx.frameIndex()))
-                .set("seed", ctx.seed())
-                .set("neighbours", uint32_t(param<int>("neighbours")))
+            KernelParams(*this, *mPipeline, ctx)
                 .set("round", uint32_t(round))
-                .set("radius", float(param<double>("radius")))
-                .set("normalThreshold", float(param<double>("normalThreshold")))
-                .set("depthThreshold", float(param<double>("depthThreshold")))
-                .set("dofShifts", restir::dofShiftBits(param<std::string>("dofShift")))
-                .set("mis", misMode());
-            ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+                .dispatch(ctx, b, ctx.width(), ctx.height());
             ctx.cmd().barrier();
             in = dst;
         }
@@ -67,10 +57,6 @@ public:
     std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
-    uint32_t misMode() const {
-        std::string v = param<std::string>("mis");
-        return v == "defensivePairwise" ? 0u : v == "pairwise" ? 1u : 2u;
-    }
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
     std::shared_ptr<gpu::Buffer> mScratch;
     restir::ShiftCounters mCounters;

@@ -38,7 +38,7 @@ public:
                 "Area ReSTIR only (initial.reuse = area): fractional motion vectors over the 2x2 "
                 "previous pixels, resampled by previous targets then shifted (fast) or all "
                 "shifted first (robust); copy = one previous pixel, subpixel offset copied");
-        r.paramEnum("dofShift", "both", restir::dofShiftValues())
+        r.paramEnum("dofShift", "both", shaderEnum("DOF_SHIFT"))
             .doc(
                 "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
                 "both combined by MIS (Zhang et al. 2024, Sec. 6; needs mis = balance)");
@@ -54,7 +54,7 @@ public:
                 "cannot shift to it (the known darkening bug)");
     }
     void compile(ShaderLibrary& shaders) override {
-        mPipeline = shaders.pipeline("passes/restir_pt/temporal.comp");
+        mPipeline = compileKernel(*this, shaders, "passes/restir_pt/temporal.comp");
     }
     void execute(ExecuteContext& ctx) override {
         gpu::Bindings b;
@@ -66,30 +66,12 @@ public:
             .set("motionImage", ctx.texture("motion"))
             .set("ReservoirsOut", ctx.buffer("reservoirsOut"))
             .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
-        gpu::PushConstants pc(*mPipeline);
-        uint32_t size[2] = {ctx.width(), ctx.height()};
-        pc.setUints("frameSize", size, 2)
-            .set("frameIndex", uint32_t(ctx.frameIndex()))
-            .set("seed", ctx.seed())
-            .set("historyValid", uint32_t(!ctx.historyReset()))
-            .set("mis", uint32_t(param<std::string>("mis") == "uniform"))
-            .set("countFailedShifts", uint32_t(param<bool>("countFailedShifts")))
-            .set("areaVariant", uint32_t(areaVariant()))
-            .set("confidenceCap", float(param<double>("confidenceCap")))
-            .set("normalThreshold", float(param<double>("normalThreshold")))
-            .set("depthThreshold", float(param<double>("depthThreshold")))
-            .set("dofShifts", restir::dofShiftBits(param<std::string>("dofShift")))
-            .set("rejectMovingSuffix", uint32_t(param<std::string>("movingSuffix") == "reject"));
-        ctx.cmd().dispatchThreads(*mPipeline, b, &pc, ctx.width(), ctx.height());
+        KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
     std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
-    int areaVariant() const {
-        std::string v = param<std::string>("areaReprojection");
-        return v == "fast" ? 0 : v == "robust" ? 1 : 2;
-    }
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
     restir::ShiftCounters mCounters;
 };

@@ -32,10 +32,10 @@ layout(push_constant) uniform Params {
     uint candidates;
     uint maxBounces;
     uint shift;
-    float roughThreshold;
-    float distThreshold;
+    float roughnessThreshold;
+    float distanceThreshold;
     uint misHeuristic;
-    uint area;
+    uint reuse;  // REUSE_PATH, REUSE_AREA
     uint rrDepth;
 } pc;
 
@@ -46,11 +46,11 @@ void main() {
     RestirSettings cfg;
     cfg.max_bounces = pc.maxBounces;
     cfg.shift = pc.shift;
-    cfg.rough_threshold = pc.roughThreshold;
-    cfg.dist_threshold = pc.distThreshold;
+    cfg.rough_threshold = pc.roughnessThreshold;
+    cfg.dist_threshold = pc.distanceThreshold;
     cfg.frame_size = pc.frameSize;
     cfg.mis_heuristic = pc.misHeuristic;
-    cfg.area = pc.area;
+    cfg.area = uint(pc.reuse == REUSE_AREA);
     if (idx == 0u) settings_out = cfg;
 
     // The camera vertex of the GBuffer's primary ray (same film and lens sample, shutter open).
@@ -69,13 +69,13 @@ void main() {
     Rng rng_sel = rng_init(pixel, pc.frameIndex, pc.seed ^ 0xA511E9B3u);
     Rng rng_film = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x3C6EF372u);
     uint rays = 0u;
-    if (primary_valid(ph) || pc.area != 0u) {
+    if (primary_valid(ph) || pc.reuse == REUSE_AREA) {
         float inv = 1.0 / float(pc.candidates);
         for (uint c = 0u; c < pc.candidates; ++c) {
             uvec4 seed = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x9E3779B1u * (c + 1u))).state;
             vec4 film_lens = smp;
             PrimaryHit cph = ph;
-            if (pc.area != 0u) {
+            if (pc.reuse == REUSE_AREA) {
                 film_lens = vec4(rng_next2(rng_film), rng_next2(rng_film));
                 cph = restir_trace_primary(scene_info.camera_open, ivec2(pixel), film_lens, pc.frameSize);
                 ++rays;

@@ -27,13 +27,9 @@ layout(push_constant) uniform Params {
     float radius;
     float normalThreshold;
     float depthThreshold;
-    uint dofShifts;  // Area ReSTIR under a thin lens: SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits
-    uint mis;        // SPATIAL_MIS_*
+    uint dofShift;  // DOF_SHIFT_*: Area ReSTIR under a thin lens
+    uint mis;       // MIS_DEFENSIVE_PAIRWISE, MIS_PAIRWISE, MIS_BALANCE (generated defines)
 } pc;
-
-const uint SPATIAL_MIS_DEFENSIVE_PAIRWISE = 0u;
-const uint SPATIAL_MIS_PAIRWISE = 1u;
-const uint SPATIAL_MIS_BALANCE = 2u;
 
 
 // A random neighbour in the disk of `radius`; false when it is this pixel, off screen, or
@@ -64,12 +60,12 @@ void main() {
     }
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x5BD1E995u * (pc.round + 1u)));
     CameraPose pose = scene_info.camera_open;
-    bool balance = pc.mis == SPATIAL_MIS_BALANCE;
+    bool balance = pc.mis == MIS_BALANCE;
     // Techniques: each valid neighbour with each shift mapping (the replayed/copied film and lens
     // sample; with Area ReSTIR under a thin lens also primary-hit reconnection, each then with
     // half the neighbour's confidence). The balance heuristic uses the copy shift only.
     uint shifts = SHIFT_COPY;
-    if (!balance && cfg.area != 0u && pose.up.w > 0.0) shifts = pc.dofShifts;
+    if (!balance && cfg.area != 0u && pose.up.w > 0.0) shifts = dof_shift_mask(pc.dofShift);
     float n_shifts = float(bitCount(shifts));
     ivec2 tq[MAX_TECHNIQUES];
     uint tshift[MAX_TECHNIQUES];
@@ -166,7 +162,7 @@ void main() {
     if (balance) {
         float d = rc.M * rc.target + den[n];
         m_c = d > 0.0 ? rc.M * rc.target / d : 0.0;
-    } else if (pc.mis == SPATIAL_MIS_DEFENSIVE_PAIRWISE || n == 0u) {
+    } else if (pc.mis == MIS_DEFENSIVE_PAIRWISE || n == 0u) {
         // Defensive: the canonical technique keeps a share 1 / (k + 1).
         norm = float(n + 1u);
     } else {

@@ -22,22 +22,23 @@ layout(std430) readonly buffer PrimaryIn { PrimaryHit primary_in[]; };
 layout(std430) readonly buffer PrevPrimary { PrimaryHit primary_prev[]; };
 layout(rg32f) uniform readonly image2D motionImage;
 
-const uint TEMPORAL_MIS_BALANCE = 0u;  // generalized balance heuristic (default)
-const uint TEMPORAL_MIS_UNIFORM = 1u;  // confidence weights over techniques that can shift
-
+// Members are filled by name from ReSTIRPTTemporal's declared parameters (KernelParams.h);
+// enum parameters arrive as indices named by generated defines: MIS_BALANCE (generalized
+// balance heuristic) / MIS_UNIFORM (confidence weights over techniques that can shift),
+// AREA_REPROJECTION_*, MOVING_SUFFIX_*, DOF_SHIFT_*.
 layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint frameIndex;
     uint seed;
-    uint historyValid;
+    uint historyReset;  // the previous-frame inputs hold no frame yet
     uint mis;
     uint countFailedShifts;  // ablation: reproduces the "failed shift in the denominator" bias
-    uint areaVariant;        // Area ReSTIR reprojection: AREA_FAST, AREA_ROBUST, AREA_COPY
+    uint areaReprojection;
     float confidenceCap;
     float normalThreshold;
     float depthThreshold;
-    uint dofShifts;    // Area ReSTIR under a thin lens: SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits
-    uint rejectMovingSuffix;  // movingSuffix = reject
+    uint dofShift;
+    uint movingSuffix;
 } pc;
 
 // Area ReSTIR temporal reprojection (Zhang et al. 2024, Sec. 5). Samples carry film positions, so
@@ -45,9 +46,9 @@ layout(push_constant) uniform Params {
 // bijection with Jacobian 1). The current pixel's footprint in the previous film, [p, p+1)^2 + t,
 // overlaps up to four previous pixels whose parts are disjoint: each previous pixel is a
 // technique covering only its part.
-const uint AREA_FAST = 0u;    // RIS over the 2x2 block by previous targets, shift the winner
-const uint AREA_ROBUST = 1u;  // shift all four first, resample by current targets
-const uint AREA_COPY = 2u;    // one previous pixel, subpixel offset copied (no fraction)
+// AREA_REPROJECTION_FAST: RIS over the 2x2 block by previous targets, shift the winner;
+// AREA_REPROJECTION_ROBUST: shift all four first, resample by current targets;
+// AREA_REPROJECTION_COPY: one previous pixel, subpixel offset copied (no fraction).
 
 bool prev_pixel_usable(ivec2 q, PrimaryHit hc) {
     if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(pc.frameSize)))) return false;
@@ -75,7 +76,7 @@ uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 // vertex (k = n) and pure replay (k = 0) are re-evaluated completely in either geometry.
 bool shift_crosses_moved_suffix(PathSample s) {
     uint k = path_rc_index(s);
-    return pc.rejectMovingSuffix != 0u && scene_info.previous_geometry.x != 0u && k != 0u &&
+    return pc.movingSuffix == MOVING_SUFFIX_REJECT && scene_info.previous_geometry.x != 0u && k != 0u &&
            k < path_length(s);
 }
 const uint MAX_PREV_SLOTS = 4u;
@@ -126,21 +127,21 @@ void main() {
                       prev_cfg.dist_threshold == cfg.dist_threshold &&
                       all(equal(prev_cfg.frame_size, cfg.frame_size)) &&
                       prev_cfg.mis_heuristic == cfg.mis_heuristic && prev_cfg.area == cfg.area;
-    if (pc.historyValid == 0u || !same_rules || !primary_valid(hc)) {
+    if (pc.historyReset != 0u || !same_rules || !primary_valid(hc)) {
         reservoirs_out[idx] = rc;
         return;
     }
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x7E3A1F55u);
     float Mc = rc.M, cap = pc.confidenceCap * rc.M;
-    bool fractional = cfg.area != 0u && pc.areaVariant != AREA_COPY;
+    bool fractional = cfg.area != 0u && pc.areaReprojection != AREA_REPROJECTION_COPY;
     vec2 t = imageLoad(motionImage, ivec2(pixel)).xy;
     // Shift mappings: each is a technique per previous pixel with 1 / n_shifts of its confidence,
     // combined with the canonical technique by pairwise MIS (with one shift: the 2-technique
     // generalized balance heuristic). Primary-hit reconnection needs the balance heuristic.
     uint shifts = SHIFT_COPY;
-    if (cfg.area != 0u && pc.mis == TEMPORAL_MIS_BALANCE && scene_info.camera_open.up.w > 0.0 &&
+    if (cfg.area != 0u && pc.mis == MIS_BALANCE && scene_info.camera_open.up.w > 0.0 &&
         scene_info.camera_prev.up.w > 0.0)
-        shifts = pc.dofShifts;
+        shifts = dof_shift_mask(pc.dofShift);
     float n_shifts = float(bitCount(shifts));
 
     // Previous-frame techniques: one pixel (ReSTIR PT, Area copy) or the 2x2 footprint block.
@@ -204,7 +205,7 @@ void main() {
             vec2 X = vec2(q) + rq.s.film_lens.xy - t;
             if (rq.W <= 0.0 || any(lessThan(X, vec2(pixel))) || any(greaterThanEqual(X, vec2(pixel) + 1.0)))
                 continue;
-            if (pc.areaVariant == AREA_FAST) {
+            if (pc.areaReprojection == AREA_REPROJECTION_FAST) {
                 // Resample by the previous targets (no shift yet); parts are disjoint: weight 1.
                 PathSample sq = rq.s;
                 sq.film_lens.xy = X - vec2(pixel);
@@ -217,7 +218,7 @@ void main() {
             in_slot[n_in] = sl;
             ++n_in;
         }
-        if (pc.areaVariant == AREA_FAST && frac_r.w_sum > 0.0) {
+        if (pc.areaReprojection == AREA_REPROJECTION_FAST && frac_r.w_sum > 0.0) {
             W_frac = frac_r.w_sum / frac_r.target;
             in_s[0] = reservoirs_prev[pixel_index(slot_q[frac_r.pad])].s;
             in_off[0] = frac_r.s.film_lens.xy;
@@ -287,13 +288,13 @@ void main() {
         uint sl = jobs[j].source;
         PathReservoir rq = reservoirs_prev[pixel_index(slot_q[sl])];
         float t_prev = rq.target, W = rq.W;
-        if (fractional && pc.areaVariant == AREA_FAST) {
+        if (fractional && pc.areaReprojection == AREA_REPROJECTION_FAST) {
             t_prev = frac_r.target;
             W = W_frac;
         }
         float t_qc = luminance(F[j]);
         float m_q;
-        if (pc.mis == TEMPORAL_MIS_BALANCE) {
+        if (pc.mis == MIS_BALANCE) {
             float t_own = J[j] > 0.0 ? t_prev / J[j] : 0.0;
             m_q = mis_balance2(slot_M[sl] / n_shifts, t_own, Mc, t_qc) / n_shifts;
         } else {
@@ -303,7 +304,7 @@ void main() {
     }
     float M_partner = canonical_partner ? slot_M[partner_slot] : 0.0;
     float m_c;
-    if (pc.mis == TEMPORAL_MIS_BALANCE) {
+    if (pc.mis == MIS_BALANCE) {
         m_c = 0.0;
         uint k = 0u;
         for (uint sh = SHIFT_COPY; sh <= SHIFT_PRIMARY_RECONNECT; sh <<= 1) {

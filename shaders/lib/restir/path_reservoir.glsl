@@ -7,10 +7,10 @@
 
 #include "lib/rng.glsl"
 
-// Shift mappings (RestirSettings.shift).
-const uint SHIFT_HYBRID = 0u;        // replay up to the reconnection vertex, then reconnect
-const uint SHIFT_RECONNECTION = 1u;  // reconnect at the secondary hit x2, else fail
-const uint SHIFT_REPLAY = 2u;        // random replay of the whole path
+// Shift mappings (RestirSettings.shift): SHIFT_HYBRID (replay up to the reconnection vertex,
+// then reconnect), SHIFT_RECONNECTION (reconnect at the secondary hit x2, else fail),
+// SHIFT_REPLAY (random replay of the whole path). A registered shader enum: the values come
+// from its declaration in passes/restir_pt/PathReservoir.cpp.
 
 // How the reconnection vertex x_k is stored (PathSample.flags bits 9-10).
 const uint RC_SURFACE = 0u;    // triangle (rc_id) + barycentrics: a scattering vertex or an emitter
@@ -24,7 +24,7 @@ struct RestirSettings {
     float rough_threshold;   // hybrid shift: both reconnection endpoints need alpha > this
     float dist_threshold;    // hybrid shift: reconnection segment length >= this
     uvec2 frame_size;
-    uint mis_heuristic;      // NEE/BSDF MIS inside a path (MIS_BALANCE / MIS_POWER)
+    uint mis_heuristic;      // NEE/BSDF MIS inside a path (MIS_HEURISTIC_*)
     uint area;               // Area ReSTIR: film and lens samples belong to the path sample
 };
 

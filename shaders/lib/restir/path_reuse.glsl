@@ -37,6 +37,13 @@ PrimaryHit restir_domain_primary(RestirSettings cfg, PathSample s, PrimaryHit pi
 const uint SHIFT_COPY = 1u;               // film and lens sample replayed (lens-vertex copy)
 const uint SHIFT_PRIMARY_RECONNECT = 2u;  // primary hit kept, lens point solved for
 
+// The shift masks of a dofShift choice (DOF_SHIFT_*, declared in passes/restir_pt).
+uint dof_shift_mask(uint dof_shift) {
+    return dof_shift == DOF_SHIFT_BOTH   ? SHIFT_COPY | SHIFT_PRIMARY_RECONNECT
+           : dof_shift == DOF_SHIFT_COPY ? SHIFT_COPY
+                                         : SHIFT_PRIMARY_RECONNECT;
+}
+
 // Thin-lens point on the focal plane seen through film position (pixel + offset).
 vec3 camera_focal_point(CameraFrame cam, vec2 film_uv) {
     vec3 d = vec3((1.0 - 2.0 * film_uv.x) * cam.tan_half_fov.x,
