@@ -309,12 +309,21 @@ OrderResult order(const GraphModel& g, const CullResult& c) {
                     prev->second.second, g.nodes[w].name, out->inPlaceOf));
             writer[value] = {w, out->name};
             for (auto& e : g.edges) {
-                if (e.isExecutionOnly() || e.src + "." + e.srcPort != value ||
-                    e.dst == g.nodes[w].name)
-                    continue;
+                if (e.isExecutionOnly() || e.src + "." + e.srcPort != value) continue;
                 int r = g.find(e.dst);
-                if (!c.keep[r] || g.isFeedback(e)) continue;  // feedback reads the history copy
-                OrderingEdge oe{e.dst, g.nodes[w].name, value};
+                if (!c.keep[r]) continue;
+                // Previous-frame readers count too: the history copy of `value` is refreshed
+                // after they read it and before the write (stage 5), which no pass can do for
+                // the writer itself.
+                if (r == w && g.isFeedback(e))
+                    throw GraphError(fmt::format(
+                        "{}: pass '{}' ({}): input '{}' reads the previous frame of {}, which the "
+                        "pass also writes in place (output '{}'); the history copy cannot be "
+                        "refreshed in the middle of the pass: give '{}' an output of its own",
+                        g.nodes[w].where, g.nodes[w].name, g.nodes[w].type, e.dstPort, value,
+                        out->name, out->name));
+                if (r == w) continue;
+                OrderingEdge oe{e.dst, g.nodes[w].name, value, g.isFeedback(e)};
                 if (std::find(o.inPlaceEdges.begin(), o.inPlaceEdges.end(), oe) !=
                     o.inPlaceEdges.end())
                     continue;
@@ -348,9 +357,10 @@ OrderResult order(const GraphModel& g, const CullResult& c) {
                 for (size_t k = 0; k + 1 < cycle.size(); ++k)
                     if (cycle[k] == e.before && cycle[k + 1] == e.after && why.empty())
                         why = fmt::format(
-                            "'{}' writes {} in place, so '{}', which reads {}, must run before "
-                            "it",
-                            e.after, e.resource, e.before, e.resource);
+                            "'{}' writes {} in place, so '{}', which reads {}{}, must run "
+                            "before it",
+                            e.after, e.resource, e.before, e.resource,
+                            e.previousFrame ? " of the previous frame" : "");
             throw GraphError(
                 fmt::format("{}: in-place write cannot be ordered: {}; but the "
                             "graph also needs {}",
@@ -504,14 +514,22 @@ ResourcePlan feedback(const GraphModel& g, const CullResult& c, const OrderResul
         std::string histKey = srcKey + "@prev";
         auto h = plan.portResource.find(histKey);
         if (h == plan.portResource.end()) {
-            // The value of srcKey is final when its producer is done; a later in-place writer
-            // changes the memory, so then copy right after the producer, else at frame end.
+            // Usually the copy runs at the end of the frame. When a later pass overwrites
+            // srcKey in place, it runs once the producer and every previous-frame reader are
+            // done; stage 3 ordered those readers before the writer.
             bool overwritten = false;
             for (int w = 0; w < int(g.nodes.size()); ++w)
                 if (c.keep[w])
                     for (auto [out, in] : inPlaceWrites(g, w))
                         overwritten |= in->src + "." + in->srcPort == srcKey;
-            int copyAt = overwritten ? o.position[g.find(e.src)] : end;
+            int copyAt = end;
+            if (overwritten) {
+                copyAt = o.position[g.find(e.src)];
+                for (auto& f : g.edges)
+                    if (g.isFeedback(f) && f.src + "." + f.srcPort == srcKey &&
+                        c.keep[g.find(f.dst)])
+                        copyAt = std::max(copyAt, o.position[g.find(f.dst)]);
+            }
             CompiledGraph::Resource r = plan.resources[ri];
             r.name = histKey;
             r.firstUse = 0;

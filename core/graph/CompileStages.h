@@ -48,11 +48,13 @@ struct CullResult {
 CullResult cull(const GraphModel& g);
 
 // Stage 3: topological order of the kept passes (ties keep declaration order). Feedback edges
-// impose no order; in-place writes add edges so that every other reader of the overwritten
-// resource runs first.
+// impose no order, except that in-place writes add edges so that every other reader of the
+// overwritten value runs first, previous-frame readers included (its history copy is
+// refreshed between them and the write).
 struct OrderingEdge {
-    std::string before, after;  // pass names
-    std::string resource;       // "node.port" whose value `after` overwrites in place
+    std::string before, after;   // pass names
+    std::string resource;        // "node.port" whose value `after` overwrites in place
+    bool previousFrame = false;  // `before` reads the resource's previous-frame history copy
     bool operator==(const OrderingEdge& o) const {
         return before == o.before && after == o.after && resource == o.resource;
     }
@@ -76,8 +78,9 @@ ResourcePlan createResources(const GraphModel& g, const CullResult& c, const Ord
                              uint32_t width, uint32_t height);
 
 // Stage 5: previous-frame inputs read a persistent "src.port@prev" history copy (one per
-// produced port). The copy runs at the end of the frame, or right after the producer when a
-// later pass overwrites that value in place; the source lives until the copy.
+// produced port). The copy runs at the end of the frame or, when a later pass overwrites that
+// value in place, after its producer and its previous-frame readers (before the write); the
+// source lives until the copy.
 ResourcePlan feedback(const GraphModel& g, const CullResult& c, const OrderResult& o,
                       ResourcePlan plan);
 

@@ -475,7 +475,7 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
     const auto& cg = *mCompiled;
     auto cmd = gpu.beginCommands();
     // Feedback edges: keep a value for the next frame's previous-frame inputs, at the end of
-    // the frame or, when a later pass overwrites it in place, right after its producer.
+    // the frame or, when a later pass overwrites it in place, before that write (stage 5).
     auto copyHistory = [&](int at) {
         bool any = false;
         for (const auto& r : cg.resources) {

@@ -17,8 +17,8 @@ using loom::MemoryReport;
 using loom::RenderGraph;
 using loom::ResourceMemory;
 
-// gen -> inc (in place) -> lag, with lag reading gen's previous-frame value too, and a
-// persistent buffer on lag; inc's output is the marked one's input.
+// gen -> inc (in place) -> lag, with lag reading inc's previous-frame value too and owning a
+// persistent buffer; a -> b -> c -> d (with lag) is a chain whose a.out and c.out alias.
 const char* kGraph = R"({"name": "mem", "passes": [
   {"name": "gen", "type": "ComputePass", "params": {"shader": "g.comp",
      "outputs": {"values": {"kind": "buffer", "bytesPerPixel": 4}}}},
@@ -37,7 +37,7 @@ const char* kGraph = R"({"name": "mem", "passes": [
      "inputs": {"in": {}}, "outputs": {"out": {"format": "rgba16f"}}}},
   {"name": "d", "type": "ComputePass", "params": {"shader": "d.comp",
      "inputs": {"in": {}, "x": {}}, "outputs": {"out": {"format": "rgba32f"}}}}],
-  "edges": [["gen.values", "inc.data"], ["inc.dataOut", "lag.cur"], ["gen.values", "lag.prev"],
+  "edges": [["gen.values", "inc.data"], ["inc.dataOut", "lag.cur"], ["inc.dataOut", "lag.prev"],
             ["a.out", "b.in"], ["b.out", "c.in"], ["c.out", "d.in"], ["lag.output", "d.x"]],
   "outputs": ["d.out"]})";
 
@@ -56,7 +56,7 @@ TEST(GraphMemory, ReportListsEveryResourceWithLifetimeAndSharing) {
     EXPECT_EQ(values.bytes, 16u * 8 * 4);
     EXPECT_EQ(values.lifetime, ResourceMemory::Lifetime::Transient);
     EXPECT_EQ(values.inPlace, (std::vector<std::string>{"inc.dataOut"}));
-    const auto& hist = find(rep, "gen.values@prev");
+    const auto& hist = find(rep, "inc.dataOut@prev");
     EXPECT_EQ(hist.lifetime, ResourceMemory::Lifetime::History);
     EXPECT_EQ(find(rep, "lag#state").lifetime, ResourceMemory::Lifetime::Persistent);
     EXPECT_EQ(find(rep, "lag#state").bytes, 256u);
@@ -117,8 +117,8 @@ TEST(InspectorMemory, TableRowsMatchTheReportAndMarkTheSelectedPass) {
         EXPECT_EQ(row.name, rep.resources[i].name);
         EXPECT_EQ(row.bytes, loom::formatBytes(rep.resources[i].bytes));
         EXPECT_EQ(row.lifetime, loom::lifetimeName(rep.resources[i].lifetime));
-        // lag's own resources: its output and its persistent state (not gen.values@prev,
-        // which belongs to gen).
+        // lag's own resources: its output and its persistent state (not inc.dataOut@prev,
+        // which belongs to inc).
         bool own = row.name == "lag.output" || row.name == "lag#state";
         EXPECT_EQ(row.ofSelectedPass, own) << row.name;
     }

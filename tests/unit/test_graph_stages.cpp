@@ -461,29 +461,70 @@ TEST(GraphStages, FeedbackCreatesHistoryForPreviousFrameInputs) {
     EXPECT_EQ(res(plan, "t.out").lastUse, 2);
 }
 
-TEST(GraphStages, HistoryOfAValueOverwrittenInPlaceIsCopiedAfterItsProducer) {
-    // h reads a.out of the previous frame; w overwrites a.out in place this frame, so the copy
-    // into a.out@prev runs right after a, not at the end of the frame (it would hold w's
-    // result). The history of w.out (same memory) is copied at the end.
+TEST(GraphStages, HistoryOfAValueOverwrittenInPlaceIsCopiedBeforeTheWrite) {
+    // h1 reads a.out of the previous frame and w overwrites a.out in place this frame: h1 is
+    // ordered before w (although declared after it), and the copy into a.out@prev runs after
+    // h1 read the old copy and before w writes, not at the end of the frame (it would hold
+    // w's result). The history of w.out (same memory) is copied at the end.
     Builder b;
-    b.pass("a", source()).pass("w", inPlace()).pass("h", [](PassReflection& r) {
+    b.pass("a", source())
+        .pass("w", inPlace())
+        .pass("h1",
+              [](PassReflection& r) {
+                  r.inputTexture("prev").previousFrame();
+                  r.outputTexture("out");
+              })
+        .pass("h2", [](PassReflection& r) {
+            r.inputTexture("cur");
+            r.inputTexture("prevW").previousFrame();
+            r.outputTexture("out");
+        });
+    b.edge("a.out", "w.in").edge("a.out", "h1.prev").edge("w.out", "h2.cur");
+    b.edge("w.out", "h2.prevW").output("h1.out").output("h2.out");
+    auto c = run(b.m);
+    EXPECT_EQ(names(b.m, c.order.order), (std::vector<std::string>{"a", "h1", "w", "h2"}));
+    ASSERT_EQ(c.order.inPlaceEdges.size(), 1u);
+    EXPECT_EQ(c.order.inPlaceEdges[0], (stages::OrderingEdge{"h1", "w", "a.out"}));
+    EXPECT_TRUE(c.order.inPlaceEdges[0].previousFrame);
+    const auto& ha = res(c.plan, "h1.prev");
+    EXPECT_EQ(ha.name, "a.out@prev");
+    EXPECT_EQ(ha.historyCopyAt, 1);  // after h1, before w
+    const auto& hw = res(c.plan, "h2.prevW");
+    EXPECT_EQ(hw.name, "w.out@prev");
+    EXPECT_EQ(hw.historyCopyAt, 4);         // end of the frame
+    EXPECT_EQ(ha.historyOf, hw.historyOf);  // one resource, two values
+    EXPECT_EQ(c.plan.resources[ha.historyOf].lastUse, 4);
+    expectNoOverlap(c.plan.resources, c.alias);
+}
+
+TEST(GraphStages, PreviousFrameReadsThatCannotPrecedeTheInPlaceWriteAreRejected) {
+    // The writer itself reads the previous frame of the value it overwrites.
+    Builder b;
+    b.pass("a", source()).pass("w", [](PassReflection& r) {
+        r.inputTexture("in");
+        r.inputTexture("prev").previousFrame();
+        r.outputTexture("out").inPlaceOf("in");
+    });
+    b.edge("a.out", "w.in").edge("a.out", "w.prev").output("w.out");
+    std::string e = errorOf([&] { run(b.m); });
+    EXPECT_NE(e.find("pass 'w' (Test): input 'prev' reads the previous frame of a.out, which the "
+                     "pass also writes in place (output 'out')"),
+              std::string::npos)
+        << e;
+
+    // A previous-frame reader downstream of the writer.
+    Builder d;
+    d.pass("a", source()).pass("w", inPlace()).pass("h", [](PassReflection& r) {
         r.inputTexture("cur");
         r.inputTexture("prev").previousFrame();
-        r.inputTexture("prevW").previousFrame();
         r.outputTexture("out");
     });
-    b.edge("a.out", "w.in").edge("w.out", "h.cur").edge("a.out", "h.prev");
-    b.edge("w.out", "h.prevW").output("h.out");
-    auto c = run(b.m);
-    const auto& ha = res(c.plan, "h.prev");
-    EXPECT_EQ(ha.name, "a.out@prev");
-    EXPECT_EQ(ha.historyCopyAt, 0);  // after a
-    const auto& hw = res(c.plan, "h.prevW");
-    EXPECT_EQ(hw.name, "w.out@prev");
-    EXPECT_EQ(hw.historyCopyAt, 3);         // end of the frame
-    EXPECT_EQ(ha.historyOf, hw.historyOf);  // one resource, two versions
-    EXPECT_EQ(c.plan.resources[ha.historyOf].lastUse, 3);
-    expectNoOverlap(c.plan.resources, c.alias);
+    d.edge("a.out", "w.in").edge("w.out", "h.cur").edge("a.out", "h.prev").output("h.out");
+    e = errorOf([&] { run(d.m); });
+    EXPECT_NE(e.find("'w' writes a.out in place, so 'h', which reads a.out of the previous "
+                     "frame, must run before it"),
+              std::string::npos)
+        << e;
 }
 
 // ---------------------------------------------------------------------------------------------
