@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "apps/inspector/MemoryTable.h"
 #include "apps/inspector/ParamWidgets.h"
 #include "core/scene/Camera.h"
 #include "core/scene/SceneGpu.h"
@@ -366,6 +367,10 @@ void InspectorApp::drawUi() {
         if (ImGui::BeginTabBar("tabs")) {
             if (ImGui::BeginTabItem("Timings")) {
                 drawTimings();
+                ImGui::EndTabItem();
+            }
+            if (ImGui::BeginTabItem("Memory")) {
+                drawMemory();
                 ImGui::EndTabItem();
             }
             if (ImGui::BeginTabItem("Camera")) {
@@ -898,6 +903,34 @@ void InspectorApp::drawTimings() {
     label = fmt::format("GPU {:.1f} ms", gpu.empty() ? 0.0f : gpu.back());
     ImGui::PlotLines("##gpu", gpu.data(), int(gpu.size()), 0, label.c_str(), 0.0f, hi * 1.1f,
                      ImVec2(plotW, 40));
+}
+
+void InspectorApp::drawMemory() {
+    const RenderGraph& g = mRenderer->graph();
+    MemoryTable t = memoryTable(g.memoryReport(), mSelectedPass, g.aliasing());
+    ImGui::TextUnformatted(t.summary.c_str());
+    const ImGuiTableFlags flags = ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV |
+                                  ImGuiTableFlags_ScrollY | ImGuiTableFlags_Resizable |
+                                  ImGuiTableFlags_SizingFixedFit;
+    if (!ImGui::BeginTable("memory", 6, flags)) return;
+    ImGui::TableSetupScrollFreeze(0, 1);
+    for (const char* h : {"resource", "kind", "format/size", "bytes", "lifetime", "shares"})
+        ImGui::TableSetupColumn(h);
+    ImGui::TableHeadersRow();
+    for (const auto& r : t.rows) {
+        ImGui::TableNextRow();
+        // The selected pass's resources stand out; clicking a row selects its pass.
+        if (r.ofSelectedPass)
+            ImGui::TableSetBgColor(ImGuiTableBgTarget_RowBg0, kNodeHeaderSelected & 0x60FFFFFF);
+        ImGui::TableNextColumn();
+        if (ImGui::Selectable(r.name.c_str(), false, ImGuiSelectableFlags_SpanAllColumns))
+            mSelectedPass = r.name.substr(0, r.name.find_first_of(".#"));
+        for (const std::string* c : {&r.kind, &r.size, &r.bytes, &r.lifetime, &r.shares}) {
+            ImGui::TableNextColumn();
+            ImGui::TextUnformatted(c->c_str());
+        }
+    }
+    ImGui::EndTable();
 }
 
 void InspectorApp::drawCamera() {

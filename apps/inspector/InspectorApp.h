@@ -1,7 +1,8 @@
 #pragma once
 // loom-inspector: a render graph running live in a window. Graph view (passes, ports, edges),
 // parameter widgets from the pass declarations, a texture viewer for any port, per-pass GPU
-// timings, camera controls, hot reload of shaders and the graph file, JSON save and Lua.
+// timings, per-resource memory, camera controls, hot reload of shaders and the graph file, JSON
+// save and Lua.
 #include <chrono>
 #include <deque>
 #include <map>
@@ -54,6 +55,7 @@ private:
     void drawParameters();
     void drawTextureViewer();
     void drawTimings();
+    void drawMemory();
     void drawCamera();
     void drawScript();
     void drawLog();

@@ -73,10 +73,17 @@ std::string passTablesMarkdown(const json& pass) {
             std::string kind = p["kind"];
             if (p.value("previousFrame", false)) kind += ", **previous frame**";
             if (p.value("optional", false)) kind += ", optional";
+            if (p.contains("inPlaceOf"))
+                kind += ", in place of `" + p["inPlaceOf"].get<std::string>() + "`";
             o << "| " << (dir[0] == 'i' ? "in" : "out") << " `" << p["name"].get<std::string>()
               << "` | " << kind << " | " << cell(sizeText(p)) << " | "
               << cell(p["doc"].get<std::string>()) << " |\n";
         }
+    if (pass.contains("scratch"))
+        for (auto& p : pass["scratch"])
+            o << "| scratch `" << p["name"].get<std::string>() << "` | "
+              << p["kind"].get<std::string>() << " | " << cell(sizeText(p)) << " | "
+              << cell(p["doc"].get<std::string>()) << " |\n";
     if (!pass["params"].empty()) {
         o << "\n| parameter | type | default | doc |\n| --- | --- | --- | --- |\n";
         for (auto& p : pass["params"])
@@ -107,7 +114,7 @@ int updatePassDocs(const json& passes, const std::vector<std::string>& files, bo
         int lineNo = 0, fileChanged = 0;
         while (std::getline(lines, line)) {
             ++lineNo;
-            out += line + "\n";
+            out.append(line).push_back('\n');
             if (line.rfind(open, 0) != 0) continue;
             std::string type = line.substr(open.size());
             type = type.substr(0, type.find(' '));
@@ -125,7 +132,7 @@ int updatePassDocs(const json& passes, const std::vector<std::string>& files, bo
                     closed = true;
                     break;
                 }
-                old += line + "\n";
+                old.append(line).push_back('\n');
             }
             if (!closed)
                 throw UserError(fmt::format("{}:{}: '{}' has no closing '{}'", file, start,
@@ -139,7 +146,7 @@ int updatePassDocs(const json& passes, const std::vector<std::string>& files, bo
                         "--update-docs {}\n",
                         file, start, type, file);
             }
-            out += tables + close + "\n";
+            out.append(tables).append(close).push_back('\n');
         }
         if (fileChanged && !check) {
             std::ofstream o(file, std::ios::binary);

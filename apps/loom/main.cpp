@@ -80,7 +80,8 @@ const char* kRenderHelp = R"(usage: loom render GRAPH [options]
   --set PASS.PARAM=VALUE    set a parameter; VALUE is JSON (1.5, true, [1,2]) or a string
   --check-nan               fail if any float output holds NaN or Inf
   --timings                 print per-pass GPU times averaged over the frames (the first,
-                            warm-up frame excluded when there are several)
+                            warm-up frame excluded when there are several), then the
+                            memory of every graph resource (kind, size, lifetime, aliasing)
   --validation              enable Vulkan validation layers
   --quiet                   print only errors
 
@@ -254,6 +255,8 @@ int cmdRender(const std::vector<std::string>& args) {
             std::printf("%-24s %10.2f Mrays/s (%.0f rays/frame)\n", (p->name() + " rays").c_str(),
                         it->second / (passMs[p->name()] * 1e3), it->second / timed);
         }
+        // Memory per graph resource, from the same report the inspector shows.
+        std::printf("\n%s", formatMemoryReport(r.graph().memoryReport()).c_str());
     }
     for (auto& p : r.graph().passes())
         for (auto& [k, v] : p->stats()) logInfo("{}.{} = {}", p->name(), k, v);
@@ -340,6 +343,11 @@ int cmdValidate(const std::vector<std::string>& args) {
     return failures ? 2 : 0;
 }
 
+json bufferSize(const SizeRule& size) {
+    if (size.mode == SizeRule::Mode::Fixed) return {{"bytes", size.bytes}};
+    return {{"bytesPerPixel", size.bytesPerPixel}, {"extraBytes", size.extraBytes}};
+}
+
 json passesJson() {
     json all = json::array();
     for (auto& type : PassRegistry::instance().types()) {
@@ -356,14 +364,21 @@ json passesJson() {
             if (p.kind == ResourceKind::Texture)
                 pj["format"] = p.format ? gpu::formatName(*p.format) : "any";
             if (p.previousFrame) pj["previousFrame"] = true;
-            if (p.kind == ResourceKind::Buffer && !p.isInput) {
-                if (p.size.mode == SizeRule::Mode::Fixed)
-                    pj["size"] = {{"bytes", p.size.bytes}};
-                else
-                    pj["size"] = {{"bytesPerPixel", p.size.bytesPerPixel},
-                                  {"extraBytes", p.size.extraBytes}};
-            }
+            if (p.kind == ResourceKind::Buffer && !p.isInput) pj["size"] = bufferSize(p.size);
+            if (!p.inPlaceOf.empty()) pj["inPlaceOf"] = p.inPlaceOf;
             j[p.isInput ? "inputs" : "outputs"].push_back(pj);
+        }
+        // Scratch lives only during the pass; listed so that docs and tools see its memory.
+        j["scratch"] = json::array();
+        for (auto& p : r.scratch()) {
+            json pj{{"name", p.name},
+                    {"kind", p.kind == ResourceKind::Texture ? "texture" : "buffer"},
+                    {"doc", p.doc}};
+            if (p.kind == ResourceKind::Texture)
+                pj["format"] = gpu::formatName(p.format.value_or(gpu::Format::RGBA32F));
+            else
+                pj["size"] = bufferSize(p.size);
+            j["scratch"].push_back(pj);
         }
         j["params"] = json::array();
         for (auto& p : r.params()) {
@@ -428,8 +443,15 @@ int cmdPasses(const std::vector<std::string>& args) {
                           << port["name"].get<std::string>() << " : "
                           << port["kind"].get<std::string>() << (port.contains("format") ? " " : "")
                           << (port.contains("format") ? port["format"].get<std::string>() : "")
-                          << (port["optional"].get<bool>() ? " (optional)" : "") << "  "
-                          << port["doc"].get<std::string>() << "\n";
+                          << (port["optional"].get<bool>() ? " (optional)" : "")
+                          << (port.contains("inPlaceOf")
+                                  ? " (in place of " + port["inPlaceOf"].get<std::string>() + ")"
+                                  : "")
+                          << "  " << port["doc"].get<std::string>() << "\n";
+        for (auto& s : p["scratch"])
+            std::cout << "  scratch " << s["name"].get<std::string>() << " : "
+                      << s["kind"].get<std::string>() << "  " << s["doc"].get<std::string>()
+                      << "\n";
         for (auto& param : p["params"]) {
             std::cout << "  param " << param["name"].get<std::string>() << " : "
                       << param["type"].get<std::string>() << " = " << param["default"].dump();

@@ -27,10 +27,33 @@ const char* paramTypeName(ParamType t) {
 // PassReflection
 
 PassReflection::PortBuilder PassReflection::addPort(PortDesc port) {
-    for (auto& p : mPorts)
-        if (p.name == port.name) throw std::logic_error("duplicate port '" + port.name + "'");
+    if (findPort(port.name) || findScratch(port.name))
+        throw std::logic_error("duplicate port '" + port.name + "'");
     mPorts.push_back(std::move(port));
     return PortBuilder(mPorts.back());
+}
+
+PassReflection::PortBuilder PassReflection::scratchBuffer(const std::string& name) {
+    if (findPort(name) || findScratch(name))
+        throw std::logic_error("duplicate port or scratch '" + name + "'");
+    PortDesc p;
+    p.name = name;
+    p.isInput = false;
+    p.kind = ResourceKind::Buffer;
+    mScratch.push_back(std::move(p));
+    return PortBuilder(mScratch.back());
+}
+
+PassReflection::PortBuilder PassReflection::scratchTexture(const std::string& name, gpu::Format f) {
+    if (findPort(name) || findScratch(name))
+        throw std::logic_error("duplicate port or scratch '" + name + "'");
+    PortDesc p;
+    p.name = name;
+    p.isInput = false;
+    p.kind = ResourceKind::Texture;
+    p.format = f;
+    mScratch.push_back(std::move(p));
+    return PortBuilder(mScratch.back());
 }
 
 PassReflection::PortBuilder PassReflection::inputTexture(const std::string& name,
@@ -116,6 +139,11 @@ void PassReflection::persistentBuffer(const std::string& name, SizeRule size, st
 
 const PortDesc* PassReflection::findPort(const std::string& name) const {
     for (auto& p : mPorts)
+        if (p.name == name) return &p;
+    return nullptr;
+}
+const PortDesc* PassReflection::findScratch(const std::string& name) const {
+    for (auto& p : mScratch)
         if (p.name == name) return &p;
     return nullptr;
 }

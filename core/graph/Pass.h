@@ -40,6 +40,11 @@ struct PortDesc {
     // (a temporal feedback edge: exempt from cycle checks and ordering; the graph keeps a
     // history copy; ExecuteContext::historyReset() is true while that copy is not valid yet).
     bool previousFrame = false;
+    // Output only: the name of an input of the same pass whose resource this output reuses
+    // (read-modify-write, Granite's storage outputs). The output is the very GPU resource
+    // connected to that input; kind, format and size must match it. Other readers of that
+    // resource run before this pass. Empty: the output gets a resource of its own.
+    std::string inPlaceOf;
     std::string doc;
 };
 
@@ -77,6 +82,11 @@ public:
         PortBuilder& format(gpu::Format f) { mPort.format = f; return *this; }
         PortBuilder& anyFormat() { mPort.format.reset(); return *this; }
         PortBuilder& previousFrame(bool p = true) { mPort.previousFrame = p; return *this; }
+        // Outputs: reuse the memory of input `input` (see PortDesc::inPlaceOf).
+        PortBuilder& inPlaceOf(std::string input) {
+            mPort.inPlaceOf = std::move(input);
+            return *this;
+        }
         PortBuilder& scale(float s) { mPort.size.scale = s; return *this; }
         PortBuilder& fixedSize(uint32_t w, uint32_t h) {
             mPort.size.mode = SizeRule::Mode::Fixed;
@@ -119,6 +129,14 @@ public:
     PortBuilder inputBuffer(const std::string& name);
     PortBuilder outputBuffer(const std::string& name);
     PortBuilder addPort(PortDesc port);
+    // Scratch resources: memory a pass needs only while its execute() runs (ping-pong between
+    // rounds, temporaries). The graph creates them, shows them in the memory report and may
+    // alias them with other transient resources, since nothing survives the pass. Size them
+    // with the returned builder (bytes / bytesPerPixel for buffers, scale / fixedSize for
+    // textures); read them with ExecuteContext::scratchBuffer() / scratchTexture(). Names
+    // share the namespace of the pass's ports.
+    PortBuilder scratchBuffer(const std::string& name);
+    PortBuilder scratchTexture(const std::string& name, gpu::Format f = gpu::Format::RGBA32F);
 
     ParamBuilder param(const std::string& name, bool def);
     ParamBuilder param(const std::string& name, int def);
@@ -138,13 +156,16 @@ public:
     const std::vector<PortDesc>& ports() const { return mPorts; }
     const std::vector<ParamDesc>& params() const { return mParams; }
     const std::vector<PersistentDesc>& persistent() const { return mPersistent; }
+    const std::vector<PortDesc>& scratch() const { return mScratch; }
     const PortDesc* findPort(const std::string& name) const;
+    const PortDesc* findScratch(const std::string& name) const;
     const ParamDesc* findParam(const std::string& name) const;
 
 private:
     std::vector<PortDesc> mPorts;
     std::vector<ParamDesc> mParams;
     std::vector<PersistentDesc> mPersistent;
+    std::vector<PortDesc> mScratch;  // isInput = false
 };
 
 class ShaderLibrary;

@@ -7,6 +7,7 @@
 #include <functional>
 #include <sstream>
 
+#include "core/graph/CompileStages.h"
 #include "core/util/Hash.h"
 #include "core/util/Log.h"
 
@@ -21,26 +22,10 @@ std::pair<std::string, std::string> splitPort(const std::string& s) {
     return {s.substr(0, dot), s.substr(dot + 1)};
 }
 
-// An edge into a previous-frame input: a temporal feedback edge (no ordering constraint).
-bool isFeedbackEdge(const GraphEdge& e, const std::map<std::string, PassReflection>& refl) {
-    if (e.isExecutionOnly()) return false;
-    auto it = refl.find(e.dst);
-    if (it == refl.end()) return false;
-    const PortDesc* p = it->second.findPort(e.dstPort);
-    return p && p->isInput && p->previousFrame;
-}
-
 std::string joinNames(const std::vector<std::string>& names, const char* sep = ", ") {
     std::string out;
     for (auto& n : names) out += (out.empty() ? "" : sep) + n;
     return out;
-}
-
-std::string portList(const PassReflection& r, bool inputs) {
-    std::vector<std::string> names;
-    for (auto& p : r.ports())
-        if (p.isInput == inputs) names.push_back(p.name);
-    return names.empty() ? "(none)" : joinNames(names);
 }
 
 }  // namespace
@@ -61,6 +46,16 @@ std::shared_ptr<gpu::Image> ExecuteContext::persistentTexture(const std::string&
 }
 std::shared_ptr<gpu::Buffer> ExecuteContext::persistentBuffer(const std::string& name) const {
     return buffer("#" + name);
+}
+std::shared_ptr<gpu::Image> ExecuteContext::scratchTexture(const std::string& name) const {
+    auto t = texture("%" + name);
+    if (!t) throw UserError("no scratch texture '" + name + "' declared in reflect()");
+    return t;
+}
+std::shared_ptr<gpu::Buffer> ExecuteContext::scratchBuffer(const std::string& name) const {
+    auto b = buffer("%" + name);
+    if (!b) throw UserError("no scratch buffer '" + name + "' declared in reflect()");
+    return b;
 }
 const scene::SceneGpu& ExecuteContext::scene() const {
     if (!mFrame.scene)
@@ -348,319 +343,50 @@ json RenderGraph::getParam(const std::string& passDotParam) const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Validation
+// Validation and compilation (no GPU): the stages live in CompileStages.cpp
 
-void RenderGraph::validate() const {
-    std::map<std::string, PassReflection> refl;
-    for (auto& p : mPasses) refl[p->name()] = p->reflection();
-    auto passWhere = [&](const std::string& name) {
-        auto it = mPassWhere.find(name);
-        return it == mPassWhere.end() ? where("") : where(it->second);
-    };
-    auto nodeNames = [&] {
-        std::vector<std::string> n;
-        for (auto& p : mPasses) n.push_back(p->name());
-        return joinNames(n);
-    };
-    auto requireNode = [&](const std::string& node, const std::string& at) {
-        if (!refl.count(node))
-            throw GraphError(at + ": edge refers to unknown pass '" + node +
-                             "'; passes: " + nodeNames());
-    };
-
-    std::map<std::string, const GraphEdge*> inputSource;
-    for (const auto& e : mEdges) {
-        std::string at = e.where.empty() ? where("/edges") : e.where;
-        requireNode(e.src, at);
-        requireNode(e.dst, at);
-        if (e.src == e.dst && !isFeedbackEdge(e, refl))
-            throw GraphError(at + ": pass '" + e.src + "' is connected to itself");
-        if (e.isExecutionOnly()) continue;
-        const Pass* sp = findPass(e.src);
-        const Pass* dp = findPass(e.dst);
-        const PortDesc* so = refl[e.src].findPort(e.srcPort);
-        if (!so || so->isInput)
-            throw GraphError(fmt::format("{}: pass '{}' ({}) has no output '{}'; outputs: {}", at,
-                                         e.src, sp->type(), e.srcPort,
-                                         portList(refl[e.src], false)));
-        const PortDesc* di = refl[e.dst].findPort(e.dstPort);
-        if (!di || !di->isInput)
-            throw GraphError(fmt::format("{}: pass '{}' ({}) has no input '{}'; inputs: {}", at,
-                                         e.dst, dp->type(), e.dstPort,
-                                         portList(refl[e.dst], true)));
-        if (so->kind != di->kind)
-            throw GraphError(fmt::format("{}: {}.{} is a {} but {}.{} expects a {}", at, e.src,
-                                         e.srcPort,
-                                         so->kind == ResourceKind::Texture ? "texture" : "buffer",
-                                         e.dst, e.dstPort,
-                                         di->kind == ResourceKind::Texture ? "texture" : "buffer"));
-        if (so->kind == ResourceKind::Texture && di->format && so->format &&
-            *di->format != *so->format)
-            throw GraphError(fmt::format("{}: format mismatch: {}.{} is {} but {}.{} expects {}",
-                                         at, e.src, e.srcPort, gpu::formatName(*so->format),
-                                         e.dst, e.dstPort, gpu::formatName(*di->format)));
-        std::string key = e.dst + "." + e.dstPort;
-        if (inputSource.count(key))
-            throw GraphError(fmt::format("{}: input {} already has an edge from {}.{}", at, key,
-                                         inputSource[key]->src, inputSource[key]->srcPort));
-        inputSource[key] = &e;
+stages::GraphModel RenderGraph::model() const {
+    stages::GraphModel m;
+    for (auto& p : mPasses) {
+        auto it = mPassWhere.find(p->name());
+        m.nodes.push_back({p->name(), p->type(), p->reflection(),
+                           it == mPassWhere.end() ? where("") : where(it->second)});
     }
-
-    if (mOutputs.empty())
-        throw GraphError(where("/outputs") +
-                         ": graph has no marked output; add \"outputs\": [\"pass.port\"]");
-    for (size_t i = 0; i < mOutputs.size(); ++i) {
-        auto [node, port] = splitPort(mOutputs[i]);
-        std::string at = where("/outputs/" + std::to_string(i));
-        if (!refl.count(node))
-            throw GraphError(at + ": output '" + mOutputs[i] + "' names unknown pass '" + node +
-                             "'; passes: " + nodeNames());
-        const PortDesc* pd = refl[node].findPort(port);
-        if (!pd || pd->isInput)
-            throw GraphError(fmt::format("{}: output '{}': pass '{}' has no output port '{}'; "
-                                         "outputs: {}",
-                                         at, mOutputs[i], node, port, portList(refl[node], false)));
-    }
-
-    // Cycles: Kahn over every pass; what remains lies on or behind a cycle.
-    std::map<std::string, int> indeg;
-    std::map<std::string, std::vector<std::string>> succ;
-    for (auto& p : mPasses) indeg[p->name()] = 0;
-    for (auto& e : mEdges) {
-        if (isFeedbackEdge(e, refl)) continue;
-        succ[e.src].push_back(e.dst);
-        ++indeg[e.dst];
-    }
-    std::vector<std::string> ready;
-    for (auto& [n, d] : indeg)
-        if (d == 0) ready.push_back(n);
-    size_t visited = 0;
-    while (!ready.empty()) {
-        std::string n = ready.back();
-        ready.pop_back();
-        ++visited;
-        for (auto& s : succ[n])
-            if (--indeg[s] == 0) ready.push_back(s);
-    }
-    if (visited != mPasses.size()) {
-        // Walk predecessors inside the remainder until a node repeats: that is a cycle. Every
-        // remaining node has a remaining predecessor (its indegree counts only those), whereas
-        // a node downstream of a cycle may have no remaining successor.
-        std::string start;
-        for (auto& [n, d] : indeg)
-            if (d > 0) {
-                start = n;
-                break;
-            }
-        std::vector<std::string> path;
-        std::string cur = start;
-        while (std::find(path.begin(), path.end(), cur) == path.end()) {
-            path.push_back(cur);
-            for (auto& e : mEdges)
-                if (e.dst == cur && indeg[e.src] > 0) {
-                    cur = e.src;
-                    break;
-                }
-        }
-        auto first = std::find(path.begin(), path.end(), cur);
-        std::vector<std::string> cycle(first, path.end());
-        std::reverse(cycle.begin(), cycle.end());  // predecessor order -> edge order
-        cycle.push_back(cycle.front());
-        throw GraphError(passWhere(cycle.front()) +
-                         ": graph has a cycle: " + joinNames(cycle, " -> "));
-    }
+    m.edges = mEdges;
+    m.outputs = mOutputs;
+    for (size_t i = 0; i < mOutputs.size(); ++i)
+        m.outputWhere.push_back(where("/outputs/" + std::to_string(i)));
+    m.where = where("");
+    m.edgesWhere = where("/edges");
+    m.outputsWhere = where("/outputs");
+    return m;
 }
 
-// ---------------------------------------------------------------------------------------------
-// Compilation (no GPU)
+void RenderGraph::validate() const {
+    stages::validate(model());
+}
 
 CompiledGraph RenderGraph::compile(uint32_t width, uint32_t height) const {
     if (width == 0 || height == 0)
         throw GraphError(fmt::format("frame size {}x{} is empty", width, height));
-    // Stage 1: validate.
-    validate();
-    std::map<std::string, PassReflection> refl;
-    std::map<std::string, int> index;
-    for (size_t i = 0; i < mPasses.size(); ++i) {
-        refl[mPasses[i]->name()] = mPasses[i]->reflection();
-        index[mPasses[i]->name()] = int(i);
-    }
+    const stages::GraphModel m = model();
+    stages::validate(m);
+    const stages::CullResult culled = stages::cull(m);
+    const stages::OrderResult ordered = stages::order(m, culled);
+    stages::ResourcePlan plan = stages::createResources(m, culled, ordered, width, height);
+    plan = stages::feedback(m, culled, ordered, std::move(plan));
+    const stages::AliasResult aliased = stages::alias(plan.resources, mAliasing);
 
-    // Stage 2: cull passes that feed no marked output.
-    std::set<std::string> keep;
-    std::vector<std::string> stack;
-    for (auto& o : mOutputs) stack.push_back(splitPort(o).first);
-    while (!stack.empty()) {
-        std::string n = stack.back();
-        stack.pop_back();
-        if (!keep.insert(n).second) continue;
-        for (auto& e : mEdges)
-            if (e.dst == n) stack.push_back(e.src);
-    }
     CompiledGraph cg;
     cg.width = width;
     cg.height = height;
-    for (auto& p : mPasses)
-        if (!keep.count(p->name())) cg.culled.push_back(p->name());
-
-    // Required inputs of kept passes must be connected.
-    for (auto& p : mPasses) {
-        if (!keep.count(p->name())) continue;
-        for (auto& port : refl[p->name()].ports()) {
-            if (!port.isInput || port.optional) continue;
-            bool connected = std::any_of(mEdges.begin(), mEdges.end(), [&](auto& e) {
-                return e.dst == p->name() && e.dstPort == port.name;
-            });
-            if (!connected) {
-                auto it = mPassWhere.find(p->name());
-                throw GraphError(fmt::format(
-                    "{}: pass '{}' ({}): required input '{}' is not connected",
-                    it == mPassWhere.end() ? where("") : where(it->second), p->name(), p->type(),
-                    port.name));
-            }
-        }
-    }
-
-    // Stage 3: topological order; ties keep declaration order (determinism).
-    std::map<std::string, int> indeg;
-    for (auto& n : keep) indeg[n] = 0;
-    for (auto& e : mEdges)
-        if (keep.count(e.src) && keep.count(e.dst) && !isFeedbackEdge(e, refl)) ++indeg[e.dst];
-    std::vector<bool> done(mPasses.size(), false);
-    while (cg.order.size() < keep.size()) {
-        int pick = -1;
-        for (size_t i = 0; i < mPasses.size() && pick < 0; ++i)
-            if (!done[i] && keep.count(mPasses[i]->name()) && indeg[mPasses[i]->name()] == 0)
-                pick = int(i);
-        if (pick < 0) throw GraphError("internal: cycle survived validation");
-        done[pick] = true;
-        cg.order.push_back(pick);
-        for (auto& e : mEdges)
-            if (e.src == mPasses[pick]->name() && keep.count(e.dst) && !isFeedbackEdge(e, refl))
-                --indeg[e.dst];
-    }
-    std::map<std::string, int> position;
-    for (size_t i = 0; i < cg.order.size(); ++i) position[mPasses[cg.order[i]]->name()] = int(i);
-    const int end = int(cg.order.size());
-
-    // Stage 4: allocate. One logical resource per produced port that is consumed, marked as
-    // an output, or not optional; persistent resources live for the whole frame and beyond.
-    auto sizeOf = [&](CompiledGraph::Resource& r, const SizeRule& s) {
-        if (r.kind == ResourceKind::Texture) {
-            if (s.mode == SizeRule::Mode::Fixed) {
-                r.width = s.width;
-                r.height = s.height;
-            } else {
-                r.width = std::max(1u, uint32_t(std::lround(width * s.scale)));
-                r.height = std::max(1u, uint32_t(std::lround(height * s.scale)));
-            }
-        } else {
-            r.bytes = s.mode == SizeRule::Mode::Fixed
-                          ? s.bytes
-                          : s.bytesPerPixel * uint64_t(width) * height + s.extraBytes;
-            r.bytes = std::max<uint64_t>(r.bytes, 4);
-        }
-    };
-    for (int pos = 0; pos < end; ++pos) {
-        const Pass& pass = *mPasses[cg.order[pos]];
-        for (auto& port : refl[pass.name()].ports()) {
-            if (port.isInput) continue;
-            std::string key = pass.name() + "." + port.name;
-            bool isOutput = std::find(mOutputs.begin(), mOutputs.end(), key) != mOutputs.end();
-            int last = isOutput ? end : pos;
-            bool consumed = false;
-            for (auto& e : mEdges)
-                if (e.src == pass.name() && e.srcPort == port.name && keep.count(e.dst)) {
-                    consumed = true;
-                    // A feedback edge copies the resource into its history after the frame.
-                    last = std::max(last, isFeedbackEdge(e, refl) ? end : position[e.dst]);
-                }
-            if (port.optional && !consumed && !isOutput) continue;
-            CompiledGraph::Resource r;
-            r.name = key;
-            r.kind = port.kind;
-            r.format = port.format.value_or(gpu::Format::RGBA32F);
-            sizeOf(r, port.size);
-            r.firstUse = pos;
-            r.lastUse = last;
-            r.graphOutput = isOutput;
-            cg.portResource[key] = int(cg.resources.size());
-            cg.resources.push_back(r);
-        }
-        for (auto& pd : refl[pass.name()].persistent()) {
-            CompiledGraph::Resource r;
-            r.name = pass.name() + "#" + pd.name;
-            r.kind = pd.kind;
-            r.format = pd.format;
-            sizeOf(r, pd.size);
-            r.firstUse = 0;
-            r.lastUse = end;
-            r.persistent = true;
-            cg.portResource[r.name] = int(cg.resources.size());
-            cg.resources.push_back(r);
-        }
-    }
-    // Inputs point at their producer's resource; previous-frame inputs at a persistent history
-    // copy of it (one per produced port, shared by its feedback consumers).
-    for (auto& e : mEdges) {
-        if (e.isExecutionOnly() || !keep.count(e.dst)) continue;
-        std::string srcKey = e.src + "." + e.srcPort;
-        auto it = cg.portResource.find(srcKey);
-        if (it == cg.portResource.end()) continue;
-        int ri = it->second;
-        if (isFeedbackEdge(e, refl)) {
-            std::string histKey = srcKey + "@prev";
-            auto h = cg.portResource.find(histKey);
-            if (h == cg.portResource.end()) {
-                CompiledGraph::Resource r = cg.resources[ri];
-                r.name = histKey;
-                r.firstUse = 0;
-                r.lastUse = end;
-                r.persistent = true;
-                r.graphOutput = false;
-                r.historyOf = ri;
-                h = cg.portResource.emplace(histKey, int(cg.resources.size())).first;
-                cg.resources.push_back(r);
-            }
-            ri = h->second;
-        }
-        cg.portResource[e.dst + "." + e.dstPort] = ri;
-    }
-
-    // Stage 5: alias. Transient resources with identical descriptions and disjoint lifetimes
-    // share one physical resource; persistent resources and graph outputs never alias.
-    struct Slot {
-        int lastUse;
-        const CompiledGraph::Resource* desc;
-        bool shareable;
-    };
-    std::vector<Slot> slots;
-    std::vector<int> byFirstUse(cg.resources.size());
-    for (size_t i = 0; i < byFirstUse.size(); ++i) byFirstUse[i] = int(i);
-    std::stable_sort(byFirstUse.begin(), byFirstUse.end(), [&](int a, int b) {
-        return cg.resources[a].firstUse < cg.resources[b].firstUse;
-    });
-    for (int ri : byFirstUse) {
-        auto& r = cg.resources[ri];
-        bool shareable = mAliasing && !r.persistent && !r.graphOutput;
-        if (shareable) {
-            for (size_t s = 0; s < slots.size(); ++s) {
-                const auto& d = *slots[s].desc;
-                if (slots[s].shareable && slots[s].lastUse < r.firstUse && d.kind == r.kind &&
-                    d.format == r.format && d.width == r.width && d.height == r.height &&
-                    d.bytes == r.bytes) {
-                    r.physical = int(s);
-                    slots[s].lastUse = r.lastUse;
-                    break;
-                }
-            }
-        }
-        if (r.physical < 0) {
-            r.physical = int(slots.size());
-            slots.push_back({r.lastUse, &r, shareable});
-        }
-    }
-    cg.physicalCount = int(slots.size());
+    cg.order = ordered.order;
+    cg.culled = culled.culled;
+    for (auto& e : ordered.inPlaceEdges) cg.inPlaceEdges.push_back({e.before, e.after});
+    cg.resources = std::move(plan.resources);
+    for (size_t i = 0; i < cg.resources.size(); ++i) cg.resources[i].physical = aliased.physical[i];
+    cg.physicalCount = aliased.physicalCount;
+    cg.portResource = std::move(plan.portResource);
     return cg;
 }
 
@@ -754,10 +480,29 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
 
     const auto& cg = *mCompiled;
     auto cmd = gpu.beginCommands();
+    // Feedback edges: keep a value for the next frame's previous-frame inputs, at the end of
+    // the frame or, when a later pass overwrites it in place, before that write (stage 5).
+    auto copyHistory = [&](int at) {
+        bool any = false;
+        for (const auto& r : cg.resources) {
+            if (r.historyOf < 0 || r.historyCopyAt != at) continue;
+            const auto& src = cg.resources[r.historyOf];
+            if (r.kind == ResourceKind::Texture)
+                cmd->copyImage(*std::static_pointer_cast<gpu::Image>(mPhysical[src.physical]),
+                               *std::static_pointer_cast<gpu::Image>(mPhysical[r.physical]));
+            else
+                cmd->copyBuffer(*std::static_pointer_cast<gpu::Buffer>(mPhysical[src.physical]),
+                                *std::static_pointer_cast<gpu::Buffer>(mPhysical[r.physical]),
+                                r.bytes);
+            any = true;
+        }
+        return any;
+    };
     std::vector<uint32_t> stamps;
     stamps.push_back(cmd->timestamp());
     std::map<std::string, std::set<int>> ancestors;  // for the upstream-change hash
-    for (int pi : cg.order) {
+    for (size_t pos = 0; pos < cg.order.size(); ++pos) {
+        const int pi = cg.order[pos];
         Pass& pass = *mPasses[pi];
         std::set<int> anc{pi};
         for (auto& e : mEdges)
@@ -785,7 +530,8 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
             auto [node, port] = splitPort(key);
             std::string local;
             if (node == pass.name()) {
-                local = port;
+                // Scratch is reached through scratchBuffer()/scratchTexture() only.
+                local = cg.resources[ri].scratch ? "%" + port : port;
             } else {
                 auto hash = key.find('#');
                 if (hash == std::string::npos || key.substr(0, hash) != pass.name()) continue;
@@ -806,20 +552,11 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
                 fmt::format("pass '{}' ({}): {}", pass.name(), pass.type(), e.what()));
         }
         cmd->barrier();
+        // The in-place writer that follows must not overwrite the value before it is copied.
+        if (copyHistory(int(pos))) cmd->barrier();
         stamps.push_back(cmd->timestamp());
     }
-    // Feedback edges: keep this frame's value for the next frame's previous-frame inputs.
-    for (const auto& r : cg.resources) {
-        if (r.historyOf < 0) continue;
-        const auto& src = cg.resources[r.historyOf];
-        if (r.kind == ResourceKind::Texture)
-            cmd->copyImage(*std::static_pointer_cast<gpu::Image>(mPhysical[src.physical]),
-                           *std::static_pointer_cast<gpu::Image>(mPhysical[r.physical]));
-        else
-            cmd->copyBuffer(*std::static_pointer_cast<gpu::Buffer>(mPhysical[src.physical]),
-                            *std::static_pointer_cast<gpu::Buffer>(mPhysical[r.physical]),
-                            r.bytes);
-    }
+    copyHistory(int(cg.order.size()));
     gpu.submit(*cmd);
     const auto& ns = cmd->timestampsNs();
     mTimings.clear();

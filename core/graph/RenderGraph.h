@@ -1,6 +1,7 @@
 #pragma once
-// Render graph: load/save JSON, validate, compile (validate -> cull -> order -> allocate with
-// aliasing), execute frame by frame with per-pass GPU timings and persistent resources.
+// Render graph: load/save JSON, validate, compile (validate -> cull -> order -> create
+// resources -> feedback -> alias), execute frame by frame with per-pass GPU timings and
+// persistent resources.
 #include <map>
 #include <memory>
 #include <set>
@@ -14,6 +15,9 @@ namespace loom {
 
 namespace scene {
 class SceneGpu;
+}
+namespace stages {
+struct GraphModel;
 }
 
 // Per-frame inputs from the application (CLI, Lua, inspector) to every pass.
@@ -49,16 +53,50 @@ struct CompiledGraph {
         int firstUse = 0, lastUse = 0;  // positions in `order`
         bool persistent = false;
         bool graphOutput = false;
+        bool scratch = false;  // declared scratch: lives only while its pass executes
         int historyOf = -1;  // previous-frame copy of this resource index (feedback edges)
+        // History copies: the copy runs after the pass at this position in `order`; equal to
+        // order.size() for the end of the frame.
+        int historyCopyAt = -1;
+        // Outputs ("node.port") that write this resource in place, in execution order.
+        std::vector<std::string> inPlaceWriters;
         int physical = -1;  // index into physical resources; equal index = aliased memory
     };
     std::vector<int> order;                // pass indices in execution order
     std::vector<std::string> culled;       // passes that feed no output
+    // Ordering edges added so that other readers of a value run before its in-place writer.
+    std::vector<std::pair<std::string, std::string>> inPlaceEdges;  // {before, after}
     std::vector<Resource> resources;
     int physicalCount = 0;
     std::map<std::string, int> portResource;  // "node.port" (inputs too) -> resource index
     uint32_t width = 0, height = 0;
 };
+
+// Memory of one logical resource of a compiled graph: `loom render --timings` and the
+// inspector's Memory tab both print this (RenderGraph::memoryReport()).
+struct ResourceMemory {
+    enum class Lifetime { Transient, Output, Scratch, Persistent, History };
+    std::string name;  // node.port, node.scratch, node#persistent, node.port@prev
+    ResourceKind kind = ResourceKind::Texture;
+    std::string format;  // textures: "rgba32f"...; buffers: empty
+    uint32_t width = 0, height = 0;
+    uint64_t bytes = 0;  // textures: width * height * texel size
+    Lifetime lifetime = Lifetime::Transient;
+    int physical = -1;
+    std::vector<std::string> aliasedWith;  // other resources sharing the same memory
+    std::vector<std::string> inPlace;      // outputs written in place into this resource
+};
+struct MemoryReport {
+    std::vector<ResourceMemory> resources;  // in CompiledGraph::resources order
+    uint64_t allocatedBytes = 0;            // one per physical resource
+    uint64_t unaliasedBytes = 0;            // every logical resource on its own
+};
+const char* lifetimeName(ResourceMemory::Lifetime l);
+MemoryReport memoryReport(const CompiledGraph& cg);
+// The report as a text table with totals (loom render --timings).
+std::string formatMemoryReport(const MemoryReport& report);
+// "12.3 MiB", "4.0 KiB", "96 B".
+std::string formatBytes(uint64_t bytes);
 
 class ExecuteContext {
 public:
@@ -70,6 +108,11 @@ public:
     std::shared_ptr<gpu::Buffer> buffer(const std::string& port) const;
     std::shared_ptr<gpu::Image> persistentTexture(const std::string& name) const;
     std::shared_ptr<gpu::Buffer> persistentBuffer(const std::string& name) const;
+    // Declared scratch (PassReflection::scratchBuffer / scratchTexture); valid only during this
+    // execute(): the memory may belong to other passes' transient resources before and after.
+    // Contents are undefined on entry. Throw UserError when the pass declared no such scratch.
+    std::shared_ptr<gpu::Image> scratchTexture(const std::string& name) const;
+    std::shared_ptr<gpu::Buffer> scratchBuffer(const std::string& name) const;
     bool has(const std::string& port) const;
     // The port (or persistent resource) a buffer is bound to in this pass, "" if none.
     std::string portOf(const gpu::Buffer* buffer) const;
@@ -136,9 +179,14 @@ public:
     const std::string& sourceFile() const { return mSourceFile; }
     std::string sourceDir() const;
 
-    // Stages: validate -> cull -> order -> allocate. Pure CPU; throws GraphError.
+    // Stages (core/graph/CompileStages.h): validate -> cull -> order -> createResources ->
+    // feedback -> alias. Pure CPU; throws GraphError.
     CompiledGraph compile(uint32_t width, uint32_t height) const;
     void validate() const;
+    // The graph as the compile stages see it (declarations, edges, outputs, locations).
+    stages::GraphModel model() const;
+    // Per-resource memory of the last compile (empty before the first frame).
+    MemoryReport memoryReport() const;
     std::string toGraphviz() const;
 
     // GPU execution of one frame. Compiles on first use, after edits and on resize.

@@ -43,8 +43,8 @@ PortDef parsePort(const std::string& name, const json& j, bool isInput, bool per
     std::string what = (persistent ? "persistent '" : isInput ? "input '" : "output '") + name + "'";
     if (!j.is_object()) throw ParamError(what + " must be an object");
     checkKeys(j,
-              {"glsl", "kind", "format", "optional", "previousFrame", "doc", "scale", "size",
-               "bytes", "bytesPerPixel"},
+              {"glsl", "kind", "format", "optional", "previousFrame", "inPlaceOf", "doc", "scale",
+               "size", "bytes", "bytesPerPixel"},
               what);
     PortDef d;
     d.port = name;
@@ -76,6 +76,13 @@ PortDef parsePort(const std::string& name, const json& j, bool isInput, bool per
         if (!isInput && j["previousFrame"].get<bool>())
             throw ParamError(what + ": 'previousFrame' applies to inputs only");
         d.desc.previousFrame = j["previousFrame"];
+    }
+    if (j.contains("inPlaceOf")) {
+        // Read-modify-write: this output is the resource of the named input (the graph checks
+        // that it is an input of matching kind, format and size).
+        if (isInput || persistent) throw ParamError(what + ": 'inPlaceOf' applies to outputs only");
+        d.desc.inPlaceOf = str(j, "inPlaceOf");
+        if (d.desc.inPlaceOf.empty()) throw ParamError(what + ": 'inPlaceOf' names an input port");
     }
     d.desc.doc = str(j, "doc");
     if (j.contains("scale")) {
@@ -171,7 +178,9 @@ public:
         r.paramJson("inputs", json::object())
             .doc("{port: {glsl, kind: texture|buffer, format|any, optional, previousFrame, doc}}");
         r.paramJson("outputs", json::object())
-            .doc("{port: {glsl, kind, format, scale | size:[w,h] | bytes | bytesPerPixel, doc}}");
+            .doc(
+                "{port: {glsl, kind, format, scale | size:[w,h] | bytes | bytesPerPixel, "
+                "inPlaceOf: input, doc}}");
         r.paramJson("persistent", json::object())
             .doc("history resources that survive frames: {name: {glsl, kind, format, ...}}");
         r.paramJson("constants", json::object())

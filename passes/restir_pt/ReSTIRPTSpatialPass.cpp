@@ -13,6 +13,12 @@ public:
         r.outputBuffer("reservoirsOut")
             .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
             .doc("reservoirs after the last spatial round");
+        // Ping-pong partner of reservoirsOut between rounds. Declared for every round count:
+        // ports depending on `rounds` would recompile the graph (and reset its history) on
+        // each change; with rounds = 1 it is unused and may alias other transients.
+        r.scratchBuffer("pingPong")
+            .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
+            .doc("reservoirs of the rounds before the last (rounds > 1)");
         r.param("neighbours", 3).range(1, 8).doc("neighbours per round (at most 8)");
         r.param("radius", 20.0).min(1).doc("neighbour disk radius, pixels");
         r.param("rounds", 1).range(1, 8).doc("spatial reuse rounds, each reading the previous");
@@ -33,13 +39,12 @@ public:
     void execute(ExecuteContext& ctx) override {
         int rounds = param<int>("rounds");
         auto in = ctx.buffer("reservoirs"), out = ctx.buffer("reservoirsOut");
-        if (rounds > 1 && (!mScratch || mScratch->size() != out->size()))
-            mScratch = ctx.gpu().createBuffer(out->size(), "ReSTIRPTSpatial scratch");
+        auto scratch = ctx.scratchBuffer("pingPong");
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
         for (int round = 0; round < rounds; ++round) {
             // Ping-pong so that the last round writes the output.
             bool toOut = (rounds - 1 - round) % 2 == 0;
-            auto dst = toOut ? out : mScratch;
+            auto dst = toOut ? out : scratch;
             gpu::Bindings b;
             ctx.scene().bind(b);
             b.set("ReservoirsIn", in)
@@ -58,7 +63,6 @@ public:
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
-    std::shared_ptr<gpu::Buffer> mScratch;
     restir::ShiftCounters mCounters;
 };
 
