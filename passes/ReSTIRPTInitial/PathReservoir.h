@@ -1,6 +1,6 @@
 #pragma once
 // Host-side facts about the ReSTIR PT buffers shared by the ReSTIRPT* passes; the layouts are
-// defined in shaders/lib/restir/path_reservoir.glsl.
+// defined in shaders/lib/restir/reservoir.glsl.
 #include <map>
 #include <memory>
 #include <string>
@@ -16,7 +16,7 @@ constexpr uint64_t kReservoirBytes = 112;  // PathReservoir
 constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 
 // Area ReSTIR depth-of-field shift mappings (parameter `dofShift` of the reuse passes) as the
-// kernels' SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits (path_reuse.glsl).
+// kernels' SHIFT_COPY | SHIFT_PRIMARY_RECONNECT bits (primary_shift.glsl).
 inline const std::vector<std::string>& dofShiftValues() {
     static const std::vector<std::string> values = {"both", "copy", "reconnect"};
     return values;
@@ -25,7 +25,7 @@ inline uint32_t dofShiftBits(const std::string& v) {
     return v == "both" ? 3u : v == "copy" ? 1u : 2u;
 }
 
-// Shift attempt/success and ray counters (RestirCounters in path_shift.glsl), exposed as pass
+// Shift attempt/success and ray counters (RestirCounters in counters.glsl), exposed as pass
 // stats.
 class ShiftCounters {
 public:

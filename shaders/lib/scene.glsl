@@ -118,6 +118,19 @@ void triangle_positions(uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     p2 = scene_vertices[scene_vertex_base + tri.z].position_u.xyz;
 }
 
+// Barycentrics (u, v) of the point of triangle prim's plane nearest to p (least squares; p on
+// the triangle gives the Hit.bary convention back). Degenerate triangles: the centroid.
+vec2 triangle_barycentrics(uint prim, vec3 p) {
+    vec3 a, b, c;
+    triangle_positions(prim, a, b, c);
+    vec3 e1 = b - a, e2 = c - a, v = p - a;
+    float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+    float dv1 = dot(v, e1), dv2 = dot(v, e2);
+    float det = d11 * d22 - d12 * d12;
+    if (det == 0.0) return vec2(1.0 / 3.0);
+    return vec2(d22 * dv1 - d12 * dv2, d11 * dv2 - d12 * dv1) / det;
+}
+
 SurfacePoint surface_point(uint prim, vec2 bary) {
     uvec4 tri = scene_triangles[prim];
     VertexGpu v0 = scene_vertices[scene_vertex_base + tri.x];

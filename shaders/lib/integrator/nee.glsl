@@ -67,4 +67,32 @@ float mis_weight_environment_hit(float bsdf_pdf, vec3 d, uint heuristic) {
     return mis_weight(bsdf_pdf, light_pdf_environment(d), heuristic);
 }
 
+// What a BSDF-sampled ray from prev_p along d found: found, the surface sn (triangle prim),
+// emitting or not; else the environment. Le: the radiance it sees; light_pdf: the density with
+// which light sampling from prev_p picks the same direction (0 for a surface that is no light),
+// for the MIS weight against BSDF sampling.
+void emitter_hit(vec3 prev_p, vec3 d, bool found, uint prim, ShadingPoint sn, out vec3 Le,
+                 out float light_pdf) {
+    Le = vec3(0.0);
+    light_pdf = 0.0;
+    if (found) {
+        if (any(greaterThan(sn.emission, vec3(0.0)))) {
+            Le = emitted_radiance(sn.sp.shape, sn.sp.ng, d);
+            light_pdf = light_pdf_triangle(prev_p, prim, sn.sp.p, sn.sp.ng);
+        }
+    } else {
+        Le = environment_radiance(d);
+        light_pdf = light_pdf_environment(d);
+    }
+}
+
+// MIS weight of a path's last vertex, sampled by NEE (by_nee) or found by BSDF sampling, from
+// both techniques' densities of it at its predecessor. Delta lights only NEE can sample.
+float mis_weight_last_vertex(bool by_nee, bool delta_light, float light_pdf, float bsdf_pdf,
+                             uint heuristic) {
+    if (delta_light) return 1.0;
+    return by_nee ? mis_weight(light_pdf, bsdf_pdf, heuristic)
+                  : mis_weight(bsdf_pdf, light_pdf, heuristic);
+}
+
 #endif

@@ -3,7 +3,12 @@
 // the motion-vector reprojected pixel is shifted into this pixel and combined with the current
 // one by the 2-technique generalized balance heuristic (Talbot) with confidences; the history's
 // confidence is clamped to confidenceCap times the current one.
-#include "lib/restir/path_reuse.glsl"
+#include "lib/color.glsl"
+#include "lib/mis.glsl"
+#include "lib/restir/hybrid_shift.glsl"
+#include "lib/restir/primary.glsl"
+#include "lib/restir/primary_shift.glsl"
+#include "lib/restir/reservoir.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430) readonly buffer ReservoirsIn {
