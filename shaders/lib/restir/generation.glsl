@@ -149,11 +149,10 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
             dist = length(sn.sp.p - o);
             cos_next = abs(dot(sn.sp.ng, dn));
         }
-        vec3 Le;
-        float light_pdf;
-        emitter_hit(sh.sp.p, dn, found, hit.prim, sn, Le, light_pdf);
+        vec3 Le = emitter_hit_radiance(dn, found, sn);
         // Emitter-hit candidate: the path x1 .. x_{j+1} (n = j + 1).
         if (any(greaterThan(Le, vec3(0.0)))) {
+            float light_pdf = emitter_hit_light_pdf(sh.sp.p, dn, found, hit.prim, sn);
             float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
             vec3 C = beta_next * Le * w;
             s.light_pdf = light_pdf;

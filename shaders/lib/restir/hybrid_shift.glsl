@@ -201,10 +201,9 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
             dist = length(sn.sp.p - ray_o);
         }
         if (step == SHIFT_STEP_LAST_BSDF) {
-            vec3 Le;
-            float light_pdf;
-            emitter_hit(sh.sp.p, ray_d, found, hit.prim, sn, Le, light_pdf);
+            vec3 Le = emitter_hit_radiance(ray_d, found, sn);
             if (!delta && restir_reconnectable(cfg, n, rough_j, true, dist)) break;
+            float light_pdf = emitter_hit_light_pdf(sh.sp.p, ray_d, found, hit.prim, sn);
             float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
             result = beta * bsdf_sample_weight(bs) * Le * w;
             break;
