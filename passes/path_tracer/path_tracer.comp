@@ -102,38 +102,26 @@ void main() {
                 ++rays;
                 found = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit);
             }
-            if (!found) {
-                // Environment, MIS-weighted against light sampling of the environment.
-                vec3 Le = environment_radiance(d);
-                if (any(greaterThan(Le, vec3(0.0)))) {
-                    float w = 1.0;
-                    if (!prev_delta && pc.strategy == STRATEGY_MIS)
-                        w = mis_weight_environment_hit(prev_pdf, d, pc.misHeuristic);
-                    else if (!prev_delta && pc.strategy == STRATEGY_NEE)
-                        w = 0.0;
-                    vec3 c = beta * Le * w;
-                    L += c;
-                    if (depth <= 1u) L_direct += c;
-                }
-                break;
-            }
-            ShadingPoint sh = shading_point(hit);
-            if (depth == 0u) {
-                first_albedo += sh.mat.diffuse.rgb;
-                first_normal += sh.n;
-            }
-            // Emission hit by BSDF sampling (or seen directly).
-            if (any(greaterThan(sh.emission, vec3(0.0)))) {
-                vec3 Le = emitted_radiance(sh.sp.shape, sh.sp.ng, d);
+            ShadingPoint sh;
+            if (found) sh = shading_point(hit);
+            // Emission hit by BSDF sampling (or seen directly), or the environment on a miss,
+            // MIS-weighted against light sampling.
+            vec3 Le = emitter_hit_radiance(d, found, sh);
+            if (any(greaterThan(Le, vec3(0.0)))) {
                 float w = 1.0;
                 if (!prev_delta && pc.strategy == STRATEGY_MIS)
-                    w = mis_weight_emitter_hit(prev_pdf, prev_p, hit.prim, sh.sp.p, sh.sp.ng,
-                                               pc.misHeuristic);
+                    w = mis_weight(prev_pdf, emitter_hit_light_pdf(prev_p, d, found, hit.prim, sh),
+                                   pc.misHeuristic);
                 else if (!prev_delta && pc.strategy == STRATEGY_NEE)
                     w = 0.0;
                 vec3 c = beta * Le * w;
                 L += c;
                 if (depth <= 1u) L_direct += c;
+            }
+            if (!found) break;
+            if (depth == 0u) {
+                first_albedo += sh.mat.diffuse.rgb;
+                first_normal += sh.n;
             }
             if (depth >= pc.maxBounces) break;
 

@@ -1,6 +1,6 @@
 #pragma once
 // Host-side facts about the ReSTIR PT buffers shared by the ReSTIRPT* passes; the layouts are
-// defined in shaders/lib/restir/path_reservoir.glsl.
+// defined in shaders/lib/restir/reservoir.glsl.
 #include <map>
 #include <memory>
 #include <string>
@@ -19,7 +19,7 @@ constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 // The element sizes above are checked against the kernels' SPIR-V strides when they bind the
 // buffers (KernelParams). Shared enums (SHIFT, DOF_SHIFT) are registered in PathReservoir.cpp.
 
-// Shift attempt/success and ray counters (RestirCounters in path_shift.glsl), exposed as pass
+// Shift attempt/success and ray counters (RestirCounters in counters.glsl), exposed as pass
 // stats.
 class ShiftCounters {
 public:

@@ -10,7 +10,9 @@
 // (starting candidates at the GBuffer's sample darkened Area ReSTIR by ~6% along edges under
 // camera motion).
 #include "lib/camera.glsl"
-#include "lib/restir/path_shift.glsl"
+#include "lib/restir/generation.glsl"
+#include "lib/restir/primary.glsl"
+#include "lib/restir/reservoir.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32ui) uniform readonly uimage2D vbufferImage;

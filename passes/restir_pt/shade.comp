@@ -1,7 +1,9 @@
 #version 460
 // ReSTIR PT final shading: emission seen at the primary hit plus the reservoir's estimate
 // F(Y) W (Lin et al. 2022, Eq. 6).
-#include "lib/restir/path_shift.glsl"
+#include "lib/lights.glsl"
+#include "lib/restir/primary.glsl"
+#include "lib/restir/reservoir.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430) readonly buffer ReservoirsIn {

@@ -2,9 +2,16 @@
 // ReSTIR PT spatial reuse (Lin et al. 2022, Sec. 7): `neighbours` random pixels within `radius`,
 // each neighbour's path shifted here (Area ReSTIR with depth of field: by lens-vertex copy and by
 // primary-hit reconnection, Zhang et al. 2024 Sec. 6, each a technique of the MIS), combined
-// with the canonical reservoir by defensive pairwise MIS (path_reuse.glsl): the canonical weight starts at 1, gains 1 - (neighbour's share
-// of Y_c) per valid neighbour, and all weights are divided by (valid neighbours + 1).
-#include "lib/restir/path_reuse.glsl"
+// with the canonical reservoir by defensive pairwise MIS (restir/reuse_mis.glsl): the canonical
+// weight starts at 1, gains 1 - (neighbour's share of Y_c) per valid neighbour, and all weights
+// are divided by (valid neighbours + 1).
+#include "lib/color.glsl"
+#include "lib/mis.glsl"
+#include "lib/restir/hybrid_shift.glsl"
+#include "lib/restir/primary.glsl"
+#include "lib/restir/primary_shift.glsl"
+#include "lib/restir/reservoir.glsl"
+#include "lib/restir/reuse_mis.glsl"
 #include "lib/sampling.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -150,8 +157,7 @@ void main() {
         float t_own = J > 0.0 ? ri.target / J : 0.0;
         float m_i;
         if (balance) {
-            float d = Mi * t_own + rc.M * t + den[i];
-            m_i = d > 0.0 ? Mi * t_own / d : 0.0;
+            m_i = mis_balance(Mi * t_own, Mi * t_own + rc.M * t + den[i]);
         } else {
             m_i = pairwise_neighbour_weight(Mi, t_own, rc.M, t);
             m_c += pairwise_canonical_term(Mi, t_c_to[i], rc.M, rc.target);
@@ -160,8 +166,7 @@ void main() {
     }
     float norm = 1.0;
     if (balance) {
-        float d = rc.M * rc.target + den[n];
-        m_c = d > 0.0 ? rc.M * rc.target / d : 0.0;
+        m_c = mis_balance(rc.M * rc.target, rc.M * rc.target + den[n]);
     } else if (pc.mis == MIS_DEFENSIVE_PAIRWISE || n == 0u) {
         // Defensive: the canonical technique keeps a share 1 / (k + 1).
         norm = float(n + 1u);

@@ -3,7 +3,12 @@
 // the motion-vector reprojected pixel is shifted into this pixel and combined with the current
 // one by the 2-technique generalized balance heuristic (Talbot) with confidences; the history's
 // confidence is clamped to confidenceCap times the current one.
-#include "lib/restir/path_reuse.glsl"
+#include "lib/color.glsl"
+#include "lib/mis.glsl"
+#include "lib/restir/hybrid_shift.glsl"
+#include "lib/restir/primary.glsl"
+#include "lib/restir/primary_shift.glsl"
+#include "lib/restir/reservoir.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430) readonly buffer ReservoirsIn {
@@ -158,7 +163,7 @@ void main() {
     uint partner_slot = 0u;
     vec2 partner_off = vec2(0.0);  // the canonical sample's film offset in its partner pixel
     float M_prev = 0.0;
-    PathReservoir frac_r = reservoir_empty();  // AREA_FAST: the fractional reservoir
+    PathReservoir frac_r = reservoir_empty();  // AREA_REPROJECTION_FAST: the fractional reservoir
     float W_frac = 0.0;
     if (!fractional) {
         ivec2 q = ivec2(floor(vec2(pixel) + 0.5 + t));

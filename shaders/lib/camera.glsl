@@ -52,6 +52,14 @@ void camera_ray(CameraFrame c, vec2 uv, vec2 u_lens, out vec3 origin, out vec3 d
     dir = normalize(d_cam.x * c.right_axis + d_cam.y * c.up_axis + d_cam.z * c.forward);
 }
 
+// Thin-lens point on the focal plane seen through film position film_uv in [0,1]^2 (the point
+// every lens sample's ray through film_uv passes, camera_ray).
+vec3 camera_focal_point(CameraFrame cam, vec2 film_uv) {
+    vec3 d = vec3((1.0 - 2.0 * film_uv.x) * cam.tan_half_fov.x,
+                  (1.0 - 2.0 * film_uv.y) * cam.tan_half_fov.y, 1.0) * cam.focus_distance;
+    return cam.origin + d.x * cam.right_axis + d.y * cam.up_axis + d.z * cam.forward;
+}
+
 // Film position (uv in [0,1]^2) of world point p, or false when behind the camera.
 bool camera_project(CameraFrame c, vec3 p, out vec2 uv) {
     vec3 v = p - c.origin;

@@ -100,11 +100,19 @@ vec4 texture_fetch(uint tex, vec2 uv) {
     return mix(mix(t00, t10, w.x), mix(t01, t11, w.x), w.y);
 }
 
+// A point on a triangle with its first-order differential geometry. The partials are with
+// respect to the barycentrics (u, v) = Hit.bary, p = (1 - u - v) p0 + u p1 + v p2, which
+// parameterise every triangle (texture UVs may be missing or degenerate), as manifold walks
+// (specular manifold sampling, MNEE) step in them; chain with d(u, v)/d(uv) for texture space.
 struct SurfacePoint {
     vec3 p;
     vec3 ng;       // geometric normal (unnormalised winding order, normalised)
     vec3 ns;       // shading normal (interpolated; = ng without vertex normals)
-    vec3 dpdu;     // tangent from UVs (or an arbitrary tangent)
+    vec3 tangent;  // dp/d(texture u) from UVs (or an arbitrary tangent): the shading frame's
+    vec3 dp_du;    // = p1 - p0
+    vec3 dp_dv;    // = p2 - p0
+    vec3 dn_du;    // partials of ns: (I - ns ns^T) (n1 - n0) / |n|, n the unnormalised
+    vec3 dn_dv;    // interpolated normal; 0 without vertex normals (ns = ng is constant)
     vec2 uv;
     uint shape;
     uint prim;
@@ -116,6 +124,19 @@ void triangle_positions(uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     p0 = scene_vertices[scene_vertex_base + tri.x].position_u.xyz;
     p1 = scene_vertices[scene_vertex_base + tri.y].position_u.xyz;
     p2 = scene_vertices[scene_vertex_base + tri.z].position_u.xyz;
+}
+
+// Barycentrics (u, v) of the point of triangle prim's plane nearest to p (least squares; p on
+// the triangle gives the Hit.bary convention back). Degenerate triangles: the centroid.
+vec2 triangle_barycentrics(uint prim, vec3 p) {
+    vec3 a, b, c;
+    triangle_positions(prim, a, b, c);
+    vec3 e1 = b - a, e2 = c - a, v = p - a;
+    float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+    float dv1 = dot(v, e1), dv2 = dot(v, e2);
+    float det = d11 * d22 - d12 * d12;
+    if (det == 0.0) return vec2(1.0 / 3.0);
+    return vec2(d22 * dv1 - d12 * dv2, d11 * dv2 - d12 * dv1) / det;
 }
 
 SurfacePoint surface_point(uint prim, vec2 bary) {
@@ -137,17 +158,24 @@ SurfacePoint surface_point(uint prim, vec2 bary) {
     s.uv = b0 * uv0 + bary.x * uv1 + bary.y * uv2;
     vec3 n = b0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz;
     s.ns = dot(n, n) > 0.0 ? normalize(n) : s.ng;
+    s.dp_du = e1;
+    s.dp_dv = e2;
+    // d(n / |n|) = (I - ns ns^T) dn / |n|: the normalization removes the change along ns.
+    float n_len = length(n);
+    vec3 dn1 = v1.normal_v.xyz - v0.normal_v.xyz, dn2 = v2.normal_v.xyz - v0.normal_v.xyz;
+    s.dn_du = dot(n, n) > 0.0 ? (dn1 - s.ns * dot(s.ns, dn1)) / n_len : vec3(0.0);
+    s.dn_dv = dot(n, n) > 0.0 ? (dn2 - s.ns * dot(s.ns, dn2)) / n_len : vec3(0.0);
     // Keep the geometric normal on the side of the shading normal (consistent orientation).
     if (dot(s.ng, s.ns) < 0.0) s.ng = -s.ng;
     // Tangent from the UV parameterisation (pbrt-v4 Triangle::InteractionFromIntersection).
     vec2 duv1 = uv1 - uv0, duv2 = uv2 - uv0;
     float det = duv1.x * duv2.y - duv1.y * duv2.x;
     if (abs(det) > 1e-12) {
-        s.dpdu = (duv2.y * e1 - duv1.y * e2) / det;
+        s.tangent = (duv2.y * e1 - duv1.y * e2) / det;
     } else {
         vec3 t, b;
         orthonormal_basis(s.ns, t, b);
-        s.dpdu = t;
+        s.tangent = t;
     }
     return s;
 }

@@ -11,7 +11,7 @@ layout(std430) readonly buffer SceneMaterials { Material scene_materials[]; };
 
 struct ShadingPoint {
     SurfacePoint sp;
-    vec3 n;         // shading normal (after normal mapping)
+    vec3 n;         // shading normal (after normal mapping; sp.dn_du/dv are of sp.ns, before it)
     vec3 t, b;      // shading frame tangents
     Material mat;
     uint shape_flags;
@@ -43,7 +43,7 @@ ShadingPoint shading_point(Hit hit) {
     if (spec_tex != MATERIAL_NO_TEXTURE) s.mat.specular.rgb = texture_fetch(spec_tex, s.sp.uv).rgb;
     s.n = s.sp.ns;
     // Tangent frame from dp/du, Gram-Schmidt against the shading normal.
-    vec3 t = s.sp.dpdu - s.n * dot(s.n, s.sp.dpdu);
+    vec3 t = s.sp.tangent - s.n * dot(s.n, s.sp.tangent);
     float len = length(t);
     if (len > 1e-12) {
         s.t = t / len;

@@ -5,7 +5,11 @@
 // Jacobian |d omega_y / d omega_x|. Also the pairwise/temporal MIS weights: for random targets
 // the weights of all techniques must sum to 1. And the primary-sample-space form for cosine-
 // sampled (diffuse) predecessors: |d u_y / d u_x| by central differences of the sampling map.
-#include "lib/restir/path_reuse.glsl"
+#include "lib/mis.glsl"
+#include "lib/restir/hybrid_shift.glsl"
+#include "lib/restir/reuse_mis.glsl"
+#include "lib/rng.glsl"
+#include "lib/sampling.glsl"
 
 layout(local_size_x = 64) in;
 layout(std430) writeonly buffer Results { vec4 results[]; };  // J, J_fd, pairwise sum, temporal sum

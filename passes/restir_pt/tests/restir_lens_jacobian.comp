@@ -3,7 +3,10 @@
 // depth of field) against central finite differences of the lens sample, per pixel of a
 // thin-lens scene, shifting to the pixel (+1, +1); the shift back must restore the lens sample
 // with the inverse Jacobian (T^-1(T(x)) = x). Also the inverse concentric disk mapping.
-#include "lib/restir/path_reuse.glsl"
+#include "lib/restir/primary_shift.glsl"
+#include "lib/restir/reservoir.glsl"
+#include "lib/rng.glsl"
+#include "lib/sampling.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 // J, J_fd (-1: skipped), concentric round-trip error, shift round-trip error (-1: no forward

@@ -2,7 +2,10 @@
 // Test kernel: shifts each pixel's initial path sample back to its own primary hit (must give
 // the stored integrand exactly: the generation and shift bookkeeping agree and the shift's
 // invertibility checks accept the identity) and to the right-hand neighbour.
-#include "lib/restir/path_reuse.glsl"
+#include "lib/color.glsl"
+#include "lib/restir/hybrid_shift.glsl"
+#include "lib/restir/primary_shift.glsl"
+#include "lib/restir/reservoir.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430) readonly buffer ReservoirsIn {

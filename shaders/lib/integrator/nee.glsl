@@ -55,16 +55,28 @@ NeeSample nee_sample(ShadingPoint sh, vec3 wo, vec3 u, bool use_mis, uint heuris
     return s;
 }
 
-// MIS weight of an emissive triangle `prim` found at (p, ng) by BSDF sampling from prev_p with
-// solid-angle density bsdf_pdf, against light sampling from prev_p.
-float mis_weight_emitter_hit(float bsdf_pdf, vec3 prev_p, uint prim, vec3 p, vec3 ng,
-                             uint heuristic) {
-    return mis_weight(bsdf_pdf, light_pdf_triangle(prev_p, prim, p, ng), heuristic);
+// Emitter hits: what a BSDF-sampled ray from prev_p along d found, the surface sn (triangle
+// prim) when found, else the environment. The radiance it sees:
+vec3 emitter_hit_radiance(vec3 d, bool found, ShadingPoint sn) {
+    if (!found) return environment_radiance(d);
+    return any(greaterThan(sn.emission, vec3(0.0))) ? emitted_radiance(sn.sp.shape, sn.sp.ng, d)
+                                                    : vec3(0.0);
 }
 
-// The same for the environment seen along d.
-float mis_weight_environment_hit(float bsdf_pdf, vec3 d, uint heuristic) {
-    return mis_weight(bsdf_pdf, light_pdf_environment(d), heuristic);
+// The density with which light sampling from prev_p picks the same direction, for the MIS
+// weight against BSDF sampling (0 for a surface that is no light). Callers evaluate it only
+// where the weight is needed.
+float emitter_hit_light_pdf(vec3 prev_p, vec3 d, bool found, uint prim, ShadingPoint sn) {
+    return found ? light_pdf_triangle(prev_p, prim, sn.sp.p, sn.sp.ng) : light_pdf_environment(d);
+}
+
+// MIS weight of a path's last vertex, sampled by NEE (by_nee) or found by BSDF sampling, from
+// both techniques' densities of it at its predecessor. Delta lights only NEE can sample.
+float mis_weight_last_vertex(bool by_nee, bool delta_light, float light_pdf, float bsdf_pdf,
+                             uint heuristic) {
+    if (delta_light) return 1.0;
+    return by_nee ? mis_weight(light_pdf, bsdf_pdf, heuristic)
+                  : mis_weight(bsdf_pdf, light_pdf, heuristic);
 }
 
 #endif

@@ -1,26 +1,13 @@
-// Reuse between path reservoirs (Lin et al. 2022, Sec. 4 and 7): neighbour rejection and the
-// resampling MIS weights of temporal (generalized balance, 2 techniques) and spatial (pairwise)
-// reuse. Failed shifts enter as a target of 0, never as a confidence that contributed.
-#ifndef LOOM_RESTIR_PATH_REUSE_GLSL
-#define LOOM_RESTIR_PATH_REUSE_GLSL
+// Shifts of the primary vertex (Area ReSTIR, Zhang et al. 2024): the domain a sample starts from
+// at another pixel, and under a thin lens the primary-hit reconnection with its Jacobian. The
+// path after the primary hit is shifted by hybrid_shift.glsl.
+#ifndef LOOM_RESTIR_PRIMARY_SHIFT_GLSL
+#define LOOM_RESTIR_PRIMARY_SHIFT_GLSL
 
 #include "lib/camera.glsl"
-#include "lib/restir/path_shift.glsl"
-
-// Geometric similarity of two primary hits (a technique-set choice, independent of samples, so
-// any rule is unbiased): normals within normal_threshold (cosine) and camera distances within
-// depth_threshold relative. a is this frame's; b_previous: b is the previous frame's.
-bool restir_similar(PrimaryHit a, PrimaryHit b, bool b_previous, float normal_threshold,
-                    float depth_threshold) {
-    if (!primary_valid(a) || !primary_valid(b)) return false;
-    SurfacePoint sa = surface_point(a.hit.x, uintBitsToFloat(a.hit.yz));
-    scene_select_frame(b_previous);
-    SurfacePoint sb = surface_point(b.hit.x, uintBitsToFloat(b.hit.yz));
-    scene_select_frame(false);
-    if (dot(sa.ns, sb.ns) < normal_threshold) return false;
-    float da = length(sa.p - a.camera.xyz), db = length(sb.p - b.camera.xyz);
-    return abs(da - db) <= depth_threshold * max(da, db);
-}
+#include "lib/restir/counters.glsl"
+#include "lib/restir/primary.glsl"
+#include "lib/sampling.glsl"
 
 // The primary hit a sample starts from in the domain of `pixel` seen by camera `pose`. ReSTIR PT:
 // the pixel's own primary hit. Area ReSTIR (Zhang et al. 2024, Sec. 4): the sample's film offset
@@ -42,13 +29,6 @@ uint dof_shift_mask(uint dof_shift) {
     return dof_shift == DOF_SHIFT_BOTH   ? SHIFT_COPY | SHIFT_PRIMARY_RECONNECT
            : dof_shift == DOF_SHIFT_COPY ? SHIFT_COPY
                                          : SHIFT_PRIMARY_RECONNECT;
-}
-
-// Thin-lens point on the focal plane seen through film position (pixel + offset).
-vec3 camera_focal_point(CameraFrame cam, vec2 film_uv) {
-    vec3 d = vec3((1.0 - 2.0 * film_uv.x) * cam.tan_half_fov.x,
-                  (1.0 - 2.0 * film_uv.y) * cam.tan_half_fov.y, 1.0) * cam.focus_distance;
-    return cam.origin + d.x * cam.right_axis + d.y * cam.up_axis + d.z * cam.forward;
 }
 
 // Area change of a central projection through P from a point a (normal n_a) to a point b
@@ -111,25 +91,6 @@ bool restir_primary_reconnect(PathSample s, PrimaryHit src, vec2 src_film, Camer
         projection_area_ratio(Py, x1.p, x1.ng, Ly, cy.forward);
     dst.camera = vec4(Ly, 1.0);
     return J > 0.0 && !isinf(J);
-}
-
-// Two-technique generalized balance heuristic with confidences (Lin et al. Eq. 11 with M_i):
-// weight of technique a for a sample whose targets are t_a (own) and t_b (shifted to b).
-float mis_balance2(float M_a, float t_a, float M_b, float t_b) {
-    float den = M_a * t_a + M_b * t_b;
-    return den > 0.0 ? M_a * t_a / den : 0.0;
-}
-
-// Defensive pairwise MIS (Bitterli 2022, Sec. 9.1.3; Lin et al. 2022, Sec. 7.2). With k valid
-// neighbours every weight is divided by k + 1:
-//   neighbour q, for its shifted sample x:  m_q(x) = balance(M_q p_hat_q, M_c p_hat_c)(x)
-//   canonical, for its own sample x:        m_c(x) = 1 + sum_q (1 - balance(M_q p_hat_q, M_c p_hat_c)(x))
-// where p_hat_q(x) is the target of x shifted into q's domain (0 when that shift fails).
-float pairwise_neighbour_weight(float M_q, float t_q, float M_c, float t_c) {
-    return mis_balance2(M_q, t_q, M_c, t_c);
-}
-float pairwise_canonical_term(float M_q, float t_q, float M_c, float t_c) {
-    return 1.0 - mis_balance2(M_q, t_q, M_c, t_c);
 }
 
 #endif

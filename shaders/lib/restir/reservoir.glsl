@@ -2,8 +2,8 @@
 // rebuild the path at another pixel), the reservoir around it, the per-pixel primary hit and the
 // settings that travel with the reservoirs, so every stage shifts with the rules the sample was
 // generated under. Layouts are mirrored by passes/ReSTIRPTInitial/PathReservoir.h.
-#ifndef LOOM_RESTIR_PATH_RESERVOIR_GLSL
-#define LOOM_RESTIR_PATH_RESERVOIR_GLSL
+#ifndef LOOM_RESTIR_RESERVOIR_GLSL
+#define LOOM_RESTIR_RESERVOIR_GLSL
 
 #include "lib/rng.glsl"
 
@@ -32,7 +32,7 @@ struct RestirSettings {
 // uses the random numbers of counters 4j+1 .. 4j+4 of the replay stream `seed`.
 // The integrand is stored in a mixed measure: primary sample space for the directions before
 // x_{k-1}, area (or direction) at the reconnection vertex x_k, solid angle after it. Under the
-// hybrid shift this measure is preserved, so its Jacobian is 1 (see path_shift.glsl).
+// hybrid shift this measure is preserved, so its Jacobian is 1 (see hybrid_shift.glsl).
 struct PathSample {
     uvec4 seed;       // replay stream (rng state with counter 0)
     uint flags;       // 0-3 n, 4-7 k (0 = no reconnection vertex), 8 last vertex by NEE,

@@ -1,0 +1,50 @@
+// The pixel's primary hit (PrimaryHit, reservoir.glsl) as ReSTIR PT stores it: tracing it for a
+// film and lens sample, rebuilding its shading point, and the geometric similarity test that
+// picks reuse techniques.
+#ifndef LOOM_RESTIR_PRIMARY_GLSL
+#define LOOM_RESTIR_PRIMARY_GLSL
+
+#include "lib/camera.glsl"
+#include "lib/restir/reservoir.glsl"
+#include "lib/shading.glsl"
+
+// The primary hit of the camera ray through film position (pixel + film_lens.xy) with lens
+// sample film_lens.zw, seen by camera `pose` (Area ReSTIR samples carry these; the ray is traced
+// again in every domain). A miss keeps the ray direction.
+PrimaryHit restir_trace_primary(CameraPose pose, ivec2 pixel, vec4 film_lens, uvec2 frame_size) {
+    CameraFrame cam = camera_frame(pose, pose, 0.0);
+    vec3 o, d;
+    camera_ray(cam, (vec2(pixel) + film_lens.xy) / vec2(frame_size), film_lens.zw, o, d);
+    PrimaryHit ph;
+    ph.camera = vec4(o, 1.0);
+    Hit hit;
+    ph.hit = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit)
+                 ? uvec4(hit.prim, floatBitsToUint(hit.bary), 0u)
+                 : uvec4(~0u, floatBitsToUint(d));
+    return ph;
+}
+
+ShadingPoint restir_primary_shading(PrimaryHit ph) {
+    Hit h;
+    h.t = 0.0;
+    h.prim = ph.hit.x;
+    h.bary = uintBitsToFloat(ph.hit.yz);
+    return shading_point(h);
+}
+
+// Geometric similarity of two primary hits (a technique-set choice, independent of samples, so
+// any rule is unbiased): normals within normal_threshold (cosine) and camera distances within
+// depth_threshold relative. a is this frame's; b_previous: b is the previous frame's.
+bool restir_similar(PrimaryHit a, PrimaryHit b, bool b_previous, float normal_threshold,
+                    float depth_threshold) {
+    if (!primary_valid(a) || !primary_valid(b)) return false;
+    SurfacePoint sa = surface_point(a.hit.x, uintBitsToFloat(a.hit.yz));
+    scene_select_frame(b_previous);
+    SurfacePoint sb = surface_point(b.hit.x, uintBitsToFloat(b.hit.yz));
+    scene_select_frame(false);
+    if (dot(sa.ns, sb.ns) < normal_threshold) return false;
+    float da = length(sa.p - a.camera.xyz), db = length(sb.p - b.camera.xyz);
+    return abs(da - db) <= depth_threshold * max(da, db);
+}
+
+#endif
