@@ -215,5 +215,129 @@ TEST(ManifoldConstraints, TotalInternalReflectionSwapsTheRoles) {
     EXPECT_FALSE(res[2].valid);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Derivatives against central finite differences of the constraint value itself.
+
+ImageData runKernel(const std::string& kernel, const ImageData& in) {
+    test::TempDir dir("loom-manifold");
+    writeImage(dir / "in.exr", in);
+    auto graph = RenderGraph::parse(
+        R"({"passes": [{"name": "in", "type": "ImageLoader", "params": {"path": "in.exr"}},
+        {"name": "k", "type": "ComputePass", "params": {"shader": ")" +
+            std::string(LOOM_TEST_DATA) + "/" + kernel + R"(",
+          "inputs": {"input": {"glsl": "inputImage", "format": "rgba32f"}},
+          "outputs": {"output": {"glsl": "outputImage"}}}}],
+        "edges": [["in.output", "k.input"]], "outputs": ["k.output"]})",
+        dir / "graph.json");
+    Renderer r(test::gpuContext(), std::move(graph), in.width, in.height);
+    r.frame();
+    return r.readOutput("k.output");
+}
+
+// A vertex on a sphere (centre c, radius R, outward normal) moved along the great circle of
+// tangent t by arc length e: x(e) = c + R (cos(e/R) r + sin(e/R) t), n(e) = (x(e) - c) / R, so
+// dx/de = t and dn/de = t / R at e = 0. The neighbours move linearly along their own vectors.
+struct Chain {
+    V c;
+    double R;
+    V r, t;  // unit radial direction and unit tangent at the vertex
+    V prev, next, dprev, dnext;
+    double eta;
+    bool reflection;
+    V frameDir;
+    double wx = 1, wn = 1;  // weights of the vertex's and neighbours' motion
+};
+
+void fill(ImageData& img, uint32_t x, const Chain& ch, double e, double scale) {
+    double a = e * ch.wx / ch.R;
+    V rad = std::cos(a) * ch.r + std::sin(a) * ch.t;
+    V xv = ch.c + ch.R * rad;
+    V xp = ch.prev + (e * ch.wn) * ch.dprev, xn = ch.next + (e * ch.wn) * ch.dnext;
+    V rows[9] = {xp, xv, xn, rad, (scale * ch.wn) * ch.dprev, (scale * ch.wx) * ch.t,
+                 (scale * ch.wx / ch.R) * ch.t, (scale * ch.wn) * ch.dnext, ch.frameDir};
+    for (uint32_t y = 0; y < 9; ++y) {
+        img.at(x, y, 0) = float(rows[y].x);
+        img.at(x, y, 1) = float(rows[y].y);
+        img.at(x, y, 2) = float(rows[y].z);
+        img.at(x, y, 3) = 0.0f;
+    }
+    img.at(x, 1, 3) = float(ch.eta);
+    img.at(x, 2, 3) = ch.reflection ? 1.0f : 0.0f;
+}
+
+TEST(ManifoldConstraints, AngleDifferenceDerivativeMatchesFiniteDifferences) {
+    // Configurations near the manifold (the Newton walk's regime) and away from it, for
+    // reflection and refraction from both sides, moving the vertex (with its normal), its
+    // neighbours, or all together. Each column block: the point at -h, at +h, and the analytic
+    // derivative at 0 (position columns hold x(+-h), the derivative column x(0)).
+    std::mt19937 rng(5);
+    std::vector<Chain> chains;
+    while (chains.size() < 192) {
+        Chain ch;
+        ch.c = {0.2, -0.1, 0.3};
+        ch.R = 0.8;
+        ch.r = randomDir(rng);
+        ch.t = normalize(cross(ch.r, randomDir(rng)));
+        V x = ch.c + ch.R * ch.r;
+        V wi = randomDir(rng);
+        ch.reflection = chains.size() % 2 == 0;
+        ch.eta = 1.5;
+        V wo;
+        if (ch.reflection) {
+            if (dot(wi, ch.r) < 0.1) continue;
+            wo = reflect(wi, ch.r);
+        } else if (!refract(wi, ch.r, ch.eta, wo)) {
+            continue;
+        }
+        if (std::abs(dot(wi, ch.r)) < 0.1 || std::abs(dot(wo, ch.r)) < 0.1) continue;
+        // Off the manifold by up to ~0.2 rad in a third of the cases.
+        if (chains.size() % 3 == 2) wo = normalize(wo + 0.2 * randomDir(rng));
+        ch.prev = x + 1.3 * wi;
+        ch.next = x + 0.9 * wo;
+        ch.dprev = randomDir(rng);
+        ch.dnext = randomDir(rng);
+        ch.frameDir = wo;
+        int mode = int(chains.size() / 2) % 3;  // vertex only, neighbours only, all
+        ch.wx = mode == 1 ? 0 : 1;
+        ch.wn = mode == 0 ? 0 : 1;
+        chains.push_back(ch);
+    }
+    // Columns per configuration: x(-h), x(+h), x(-h/2), x(+h/2), and x(0) with the analytic
+    // derivative. The truncation error of the h/2 difference is measured as a third of its
+    // distance to the h difference (Richardson), plus the evaluation error of C (float, and
+    // lavapipe's atan approximation: ~1e-6) over h/2.
+    const double h = 1.6e-2;
+    uint32_t n = uint32_t(chains.size());
+    ImageData in = ImageData::make(5 * n, 9, 4);
+    for (uint32_t i = 0; i < n; ++i) {
+        fill(in, 5 * i, chains[i], -h, 1.0);
+        fill(in, 5 * i + 1, chains[i], +h, 1.0);
+        fill(in, 5 * i + 2, chains[i], -h / 2, 1.0);
+        fill(in, 5 * i + 3, chains[i], +h / 2, 1.0);
+        fill(in, 5 * i + 4, chains[i], 0.0, 1.0);
+    }
+    ImageData out = runKernel("manifold_derivatives.comp", in);
+    double worst = 0, worstAbs = 0;
+    int bad = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        ASSERT_NE(out.at(5 * i + 4, 0, 2), 0.0f) << "invalid configuration " << i;
+        for (int k = 0; k < 2; ++k) {
+            double fdH = (double(out.at(5 * i + 1, 0, k)) - out.at(5 * i, 0, k)) / (2 * h);
+            double fd = (double(out.at(5 * i + 3, 0, k)) - out.at(5 * i + 2, 0, k)) / h;
+            double an = out.at(5 * i + 4, 1, k);
+            double tol = std::abs(fdH - fd) + 1e-6 / (h / 2) + 1e-4 * std::abs(an);
+            worst = std::max(worst, std::abs(fd - an) / tol);
+            worstAbs = std::max(worstAbs, std::abs(fd - an));
+            if (std::abs(fd - an) > tol && bad++ < 5)
+                ADD_FAILURE() << "config " << i << (chains[i].reflection ? " reflection" : " refraction")
+                              << " component " << k << ": analytic " << an << " fd " << fd
+                              << " (fd at 2h " << fdH << ")";
+        }
+    }
+    EXPECT_EQ(bad, 0);
+    std::printf("angle-difference derivative: worst |fd - analytic| %.3g, / tol %.3f, %u configs\n",
+                worstAbs, worst, n);
+}
+
 }  // namespace
 }  // namespace loom

@@ -30,10 +30,12 @@ mat3 manifold_angle_frame(vec3 w) {
     return mat3(s, t, pole);
 }
 
-// (theta, phi) of unit w in `frame` (columns s, t, pole).
+// (theta, phi) of unit w in `frame` (columns s, t, pole). theta by atan2, not acos: acos is
+// ill-conditioned near the poles, and lavapipe's acos approximation has a slope 7e-4 off in
+// relative terms, which a Newton walk's finite-difference test sees.
 vec2 manifold_spherical(mat3 frame, vec3 w) {
     vec3 l = transpose(frame) * w;
-    return vec2(acos(clamp(l.z, -1.0, 1.0)), atan(l.y, l.x));
+    return vec2(atan(length(l.xy), l.z), atan(l.y, l.x));
 }
 
 struct SpecularScatter {
@@ -79,6 +81,69 @@ vec2 angle_difference_constraint(vec3 wi, vec3 wo, vec3 n, float eta, bool refle
     if (!valid) return vec2(0.0);
     vec2 a = manifold_spherical(frame, target), b = manifold_spherical(frame, s.w);
     return vec2(a.x - b.x, manifold_wrap_angle(a.y - b.y));
+}
+
+// The same at positions: w_i = x_prev - x and w_o = x_next - x, normalized.
+vec2 angle_difference_constraint_at(vec3 x_prev, vec3 x, vec3 x_next, vec3 n, float eta,
+                                    bool reflection, mat3 frame, out bool valid) {
+    return angle_difference_constraint(normalize(x_prev - x), normalize(x_next - x), n, eta,
+                                       reflection, frame, valid);
+}
+
+// Derivative of w = d / |d| along dd.
+vec3 manifold_d_normalize(vec3 w, float len, vec3 dd) { return (dd - w * dot(w, dd)) / len; }
+
+// Derivative of (theta, phi) of unit w along dw: dtheta = -dl_z / sin(theta),
+// dphi = (l_x dl_y - l_y dl_x) / sin^2(theta), l = w in `frame`.
+vec2 manifold_d_spherical(mat3 frame, vec3 w, vec3 dw) {
+    vec3 l = transpose(frame) * w, dl = transpose(frame) * dw;
+    float sin2 = max(l.x * l.x + l.y * l.y, 1e-12);
+    return vec2(-dl.z / sqrt(sin2), (l.x * dl.y - l.y * dl.x) / sin2);
+}
+
+// Derivative of the specular scattering of w about n (specular_reflect / specular_refract)
+// along (dw, dn), with dn tangent to n. Refraction: w_s = (c_i/e - c_t) h - w/e with
+// c_i = w.h, c_t = sqrt(1 - (1 - c_i^2)/e^2), so dc_t = c_i dc_i / (e^2 c_t).
+vec3 specular_scatter_derivative(vec3 w, vec3 n, float eta, bool reflection, vec3 ws, vec3 dw,
+                                 vec3 dn) {
+    vec3 d;
+    if (reflection) {
+        float c = dot(w, n);
+        d = 2.0 * (dot(dw, n) + dot(w, dn)) * n + 2.0 * c * dn - dw;
+    } else {
+        float c = dot(w, n);
+        vec3 h = c >= 0.0 ? n : -n, dh = c >= 0.0 ? dn : -dn;
+        float e = c >= 0.0 ? eta : 1.0 / eta;
+        float ci = dot(w, h), dci = dot(dw, h) + dot(w, dh);
+        float ct = sqrt(max(1.0 - (1.0 - ci * ci) / (e * e), 1e-12));
+        float dct = ci * dci / (e * e * ct);
+        d = (dci / e - dct) * h + (ci / e - ct) * dh - dw / e;
+    }
+    return d - ws * dot(ws, d);
+}
+
+// Directional derivative of angle_difference_constraint_at when the vertices move by dx_prev,
+// dx, dx_next and the normal at x by dn (e.g. dp/du and dn/du of a SurfacePoint): the Jacobian
+// blocks dC/du, dC/dv of a manifold walk's Newton step are such derivatives.
+vec2 angle_difference_constraint_derivative(vec3 x_prev, vec3 x, vec3 x_next, vec3 n, float eta,
+                                            bool reflection, mat3 frame, vec3 dx_prev, vec3 dx,
+                                            vec3 dn, vec3 dx_next) {
+    vec3 di = x_prev - x, dout = x_next - x;
+    vec3 wi = normalize(di), wo = normalize(dout);
+    vec3 dwi = manifold_d_normalize(wi, length(di), dx_prev - dx);
+    vec3 dwo = manifold_d_normalize(wo, length(dout), dx_next - dx);
+    SpecularScatter s = reflection ? specular_reflect(wi, n) : specular_refract(wi, n, eta);
+    vec3 from = wi, dfrom = dwi, target = wo, dtarget = dwo;
+    if (!s.valid) {  // total internal reflection: w_o is refracted and compared with w_i
+        s = specular_refract(wo, n, eta);
+        from = wo;
+        dfrom = dwo;
+        target = wi;
+        dtarget = dwi;
+    }
+    if (!s.valid) return vec2(0.0);
+    vec3 ds = specular_scatter_derivative(from, n, eta, reflection, s.w, dfrom, dn);
+    return manifold_d_spherical(frame, target, dtarget) - manifold_d_spherical(frame, s.w, ds);
 }
 
 // Half-vector constraint (Hanika et al. 2015, Sec. 4; Zeltner et al. Sec. 5.1): the generalized
