@@ -17,9 +17,12 @@ namespace {
 std::string cell(std::string s) {
     std::string out;
     for (char c : s) {
-        if (c == '|') out += "\\|";
-        else if (c == '\n') out += ' ';
-        else out += c;
+        if (c == '|')
+            out += "\\|";
+        else if (c == '\n')
+            out += ' ';
+        else
+            out += c;
     }
     return out;
 }
@@ -60,7 +63,8 @@ std::string sizeText(const json& port) {
     const json& s = port["size"];
     if (s.contains("bytes")) return fmt::format("{} B", s["bytes"].get<uint64_t>());
     uint64_t extra = s.value("extraBytes", uint64_t(0)), per = s["bytesPerPixel"];
-    return extra ? fmt::format("{} B + {} B / pixel", extra, per) : fmt::format("{} B / pixel", per);
+    return extra ? fmt::format("{} B + {} B / pixel", extra, per)
+                 : fmt::format("{} B / pixel", per);
 }
 
 }  // namespace
@@ -94,8 +98,8 @@ std::string passTablesMarkdown(const json& pass) {
     if (!pass["persistent"].empty()) {
         o << "\n| persistent | doc |\n| --- | --- |\n";
         for (auto& p : pass["persistent"])
-            o << "| `" << p["name"].get<std::string>() << "` | " << cell(p["doc"].get<std::string>())
-              << " |\n";
+            o << "| `" << p["name"].get<std::string>() << "` | "
+              << cell(p["doc"].get<std::string>()) << " |\n";
     }
     return o.str();
 }

@@ -17,7 +17,6 @@ std::string passTablesMarkdown(const nlohmann::json& pass);
 //   <!-- /loom passes -->
 // in each file with TYPE's tables. Returns the number of blocks that differed (check) or were
 // rewritten; throws UserError naming file and line for an unknown TYPE or an unclosed block.
-int updatePassDocs(const nlohmann::json& passes, const std::vector<std::string>& files,
-                   bool check);
+int updatePassDocs(const nlohmann::json& passes, const std::vector<std::string>& files, bool check);
 
 }  // namespace loom

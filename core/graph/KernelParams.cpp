@@ -74,23 +74,26 @@ void KernelParams::write(const std::string& name, const char* baseIn, uint32_t c
     std::string base = baseIn;
     std::string expected = base;
     if (count > 1)
-        expected = std::string(base == "int" ? "i" : base == "uint" ? "u" : "") + "vec" +
-                   std::to_string(count);
+        expected = std::string(base == "int"    ? "i"
+                               : base == "uint" ? "u"
+                                                : "") +
+                   "vec" + std::to_string(count);
     for (Block* b : {&mPush, &mUniform}) {
         if (!b->members) continue;
         for (auto& m : *b->members) {
             if (m.name != name) continue;
             if (m.type != expected && !(m.type == "bool" && expected == "uint"))
-                throw UserError(fmt::format("pass '{}', kernel '{}': parameter member '{}' is {} "
-                                           "but is set as {}",
-                                           mPass, mPipeline->name(), name, m.type, expected));
+                throw UserError(
+                    fmt::format("pass '{}', kernel '{}': parameter member '{}' is {} "
+                                "but is set as {}",
+                                mPass, mPipeline->name(), name, m.type, expected));
             std::memcpy(b->bytes.data() + m.offset, data, 4 * count);
             mSet.insert(name);
             return;
         }
     }
     throw UserError(fmt::format("pass '{}', kernel '{}' has no parameter member '{}'", mPass,
-                               mPipeline->name(), name));
+                                mPipeline->name(), name));
 }
 
 void KernelParams::setDeclared(const ParamDesc& desc, const json& value) {
@@ -100,12 +103,18 @@ void KernelParams::setDeclared(const ParamDesc& desc, const json& value) {
             for (auto& m : *b->members)
                 if (m.name == desc.name) type = m.type;
     switch (desc.type) {
-        case ParamType::Bool: set(desc.name, uint32_t(value.get<bool>())); break;
-        case ParamType::Int:
-            if (type == "uint") set(desc.name, uint32_t(value.get<int64_t>()));
-            else set(desc.name, int32_t(value.get<int64_t>()));
+        case ParamType::Bool:
+            set(desc.name, uint32_t(value.get<bool>()));
             break;
-        case ParamType::Float: set(desc.name, value.get<float>()); break;
+        case ParamType::Int:
+            if (type == "uint")
+                set(desc.name, uint32_t(value.get<int64_t>()));
+            else
+                set(desc.name, int32_t(value.get<int64_t>()));
+            break;
+        case ParamType::Float:
+            set(desc.name, value.get<float>());
+            break;
         case ParamType::Enum: {
             auto s = value.get<std::string>();
             uint32_t index = 0;
@@ -121,9 +130,10 @@ void KernelParams::setDeclared(const ParamDesc& desc, const json& value) {
             break;
         }
         default:
-            throw UserError(fmt::format("pass '{}': parameter '{}' ({}) cannot reach a kernel "
-                                       "member; rename the member or set it explicitly",
-                                       mPass, desc.name, paramTypeName(desc.type)));
+            throw UserError(
+                fmt::format("pass '{}': parameter '{}' ({}) cannot reach a kernel "
+                            "member; rename the member or set it explicitly",
+                            mPass, desc.name, paramTypeName(desc.type)));
     }
 }
 

@@ -31,8 +31,7 @@ std::shared_ptr<gpu::ComputePipeline> compileKernel(const Pass& pass, ShaderLibr
 
 class KernelParams {
 public:
-    KernelParams(const Pass& pass, const gpu::ComputePipeline& pipeline,
-                 const ExecuteContext& ctx);
+    KernelParams(const Pass& pass, const gpu::ComputePipeline& pipeline, const ExecuteContext& ctx);
     bool has(const std::string& member) const;
     KernelParams& set(const std::string& member, float v);
     KernelParams& set(const std::string& member, int32_t v);
@@ -44,8 +43,8 @@ public:
     std::vector<std::string> unset() const;
     // Checks completeness, binds the uniform block (if any) into `bindings` and dispatches
     // enough groups for width x height x depth threads.
-    void dispatch(ExecuteContext& ctx, gpu::Bindings& bindings, uint32_t width,
-                  uint32_t height = 1, uint32_t depth = 1);
+    void dispatch(ExecuteContext& ctx, gpu::Bindings& bindings, uint32_t width, uint32_t height = 1,
+                  uint32_t depth = 1);
 
     // The same with a group count instead of a thread count.
     void dispatchGroups(ExecuteContext& ctx, gpu::Bindings& bindings, uint32_t groupsX,

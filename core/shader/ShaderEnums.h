@@ -41,8 +41,8 @@ inline const ShaderEnum& shaderEnum(const std::string& prefix) {
     return ShaderEnumRegistry::instance().get(prefix);
 }
 
-#define LOOM_REGISTER_SHADER_ENUM(Id, Prefix, ...)                               \
-    static const bool s_shader_enum_##Id = ::loom::ShaderEnumRegistry::instance().add( \
-        {Prefix, __VA_ARGS__})
+#define LOOM_REGISTER_SHADER_ENUM(Id, Prefix, ...) \
+    static const bool s_shader_enum_##Id =         \
+        ::loom::ShaderEnumRegistry::instance().add({Prefix, __VA_ARGS__})
 
 }  // namespace loom

@@ -6,7 +6,8 @@ namespace loom::restir {
 
 LOOM_REGISTER_SHADER_ENUM(Shift, "SHIFT", {"hybrid", "reconnection", "replay"},
                           "shift mapping of all reuse (Lin et al. 2022, Sec. 6)");
-LOOM_REGISTER_SHADER_ENUM(DofShift, "DOF_SHIFT", {"both", "copy", "reconnect"},
-                          "Area ReSTIR primary-vertex shifts under a thin lens (Zhang et al. 2024)");
+LOOM_REGISTER_SHADER_ENUM(
+    DofShift, "DOF_SHIFT", {"both", "copy", "reconnect"},
+    "Area ReSTIR primary-vertex shifts under a thin lens (Zhang et al. 2024)");
 
 }  // namespace loom::restir

@@ -17,11 +17,21 @@ namespace {
 struct V {
     double x, y, z;
 };
-V operator+(V a, V b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V operator*(double s, V a) { return {s * a.x, s * a.y, s * a.z}; }
-double dot(V a, V b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V cross(V a, V b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-V normalize(V a) { return (1.0 / std::sqrt(dot(a, a))) * a; }
+V operator+(V a, V b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+V operator*(double s, V a) {
+    return {s * a.x, s * a.y, s * a.z};
+}
+double dot(V a, V b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+V cross(V a, V b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+V normalize(V a) {
+    return (1.0 / std::sqrt(dot(a, a))) * a;
+}
 
 // Snell's law in vector form (w and the result point away from the surface); eta = n_int/n_ext
 // with n towards the exterior. Returns false under total internal reflection.
@@ -35,7 +45,9 @@ bool refract(V w, V n, double eta, V& out) {
     out = normalize((-1.0 / e) * w + (ci / e - ct) * m);
     return true;
 }
-V reflect(V w, V n) { return (2 * dot(w, n)) * n + -1.0 * w; }
+V reflect(V w, V n) {
+    return (2 * dot(w, n)) * n + -1.0 * w;
+}
 
 struct Config {
     V wi, n, wo;
@@ -167,8 +179,9 @@ TEST(ManifoldConstraints, GrowsLikeTheAngleOffTheManifold) {
 TEST(ManifoldConstraints, PhiDifferenceWrapsIntoMinusPiPi) {
     std::vector<Config> cs;
     const double pi = 3.14159265358979;
-    double pairs[][2] = {{pi - 0.01, -pi + 0.01}, {-pi + 0.02, pi - 0.03}, {0.5, 0.25},
-                         {3.0, -3.0},           {-2.0, 2.5},             {pi - 1e-3, pi - 1e-3}};
+    double pairs[][2] = {
+        {pi - 0.01, -pi + 0.01}, {-pi + 0.02, pi - 0.03}, {0.5, 0.25}, {3.0, -3.0}, {-2.0, 2.5},
+        {pi - 1e-3, pi - 1e-3}};
     for (auto& p : pairs) {
         Config c = exactConfigs(1, 1)[0];
         c.a = p[0];
@@ -253,8 +266,15 @@ void fill(ImageData& img, uint32_t x, const Chain& ch, double e, double scale) {
     V rad = std::cos(a) * ch.r + std::sin(a) * ch.t;
     V xv = ch.c + ch.R * rad;
     V xp = ch.prev + (e * ch.wn) * ch.dprev, xn = ch.next + (e * ch.wn) * ch.dnext;
-    V rows[9] = {xp, xv, xn, rad, (scale * ch.wn) * ch.dprev, (scale * ch.wx) * ch.t,
-                 (scale * ch.wx / ch.R) * ch.t, (scale * ch.wn) * ch.dnext, ch.frameDir};
+    V rows[9] = {xp,
+                 xv,
+                 xn,
+                 rad,
+                 (scale * ch.wn) * ch.dprev,
+                 (scale * ch.wx) * ch.t,
+                 (scale * ch.wx / ch.R) * ch.t,
+                 (scale * ch.wn) * ch.dnext,
+                 ch.frameDir};
     for (uint32_t y = 0; y < 9; ++y) {
         img.at(x, y, 0) = float(rows[y].x);
         img.at(x, y, 1) = float(rows[y].y);
@@ -263,6 +283,30 @@ void fill(ImageData& img, uint32_t x, const Chain& ch, double e, double scale) {
     }
     img.at(x, 1, 3) = float(ch.eta);
     img.at(x, 2, 3) = ch.reflection ? 1.0f : 0.0f;
+}
+
+// Columns per configuration i: 5i = C at -h, 5i+1 at +h, 5i+2 at -h/2, 5i+3 at +h/2, and
+// 5i+4 the analytic derivative (row 1) at 0; row 0 holds C. The truncation error of the h/2
+// difference is measured as its distance to the h difference (Richardson), plus the
+// evaluation error of C (float, and lavapipe's atan approximation: ~1e-6) over h/2.
+void expectDerivativesMatch(const ImageData& out, uint32_t n, double h, const char* what) {
+    double worst = 0, worstAbs = 0;
+    int bad = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 2; ++k) {
+            double fdH = (double(out.at(5 * i + 1, 0, k)) - out.at(5 * i, 0, k)) / (2 * h);
+            double fd = (double(out.at(5 * i + 3, 0, k)) - out.at(5 * i + 2, 0, k)) / h;
+            double an = out.at(5 * i + 4, 1, k);
+            double tol = std::abs(fdH - fd) + 1e-6 / (h / 2) + 1e-4 * std::abs(an);
+            worst = std::max(worst, std::abs(fd - an) / tol);
+            worstAbs = std::max(worstAbs, std::abs(fd - an));
+            if (std::abs(fd - an) > tol && bad++ < 5)
+                ADD_FAILURE() << what << ", config " << i << " component " << k << ": analytic "
+                              << an << " fd " << fd << " (fd at 2h " << fdH << ")";
+        }
+    EXPECT_EQ(bad, 0) << what;
+    std::printf("%s: worst |fd - analytic| %.3g, / tol %.3f, %u configs\n", what, worstAbs, worst,
+                n);
 }
 
 TEST(ManifoldConstraints, AngleDifferenceDerivativeMatchesFiniteDifferences) {
@@ -302,10 +346,6 @@ TEST(ManifoldConstraints, AngleDifferenceDerivativeMatchesFiniteDifferences) {
         ch.wn = mode == 0 ? 0 : 1;
         chains.push_back(ch);
     }
-    // Columns per configuration: x(-h), x(+h), x(-h/2), x(+h/2), and x(0) with the analytic
-    // derivative. The truncation error of the h/2 difference is measured as a third of its
-    // distance to the h difference (Richardson), plus the evaluation error of C (float, and
-    // lavapipe's atan approximation: ~1e-6) over h/2.
     const double h = 1.6e-2;
     uint32_t n = uint32_t(chains.size());
     ImageData in = ImageData::make(5 * n, 9, 4);
@@ -316,27 +356,73 @@ TEST(ManifoldConstraints, AngleDifferenceDerivativeMatchesFiniteDifferences) {
         fill(in, 5 * i + 3, chains[i], +h / 2, 1.0);
         fill(in, 5 * i + 4, chains[i], 0.0, 1.0);
     }
-    ImageData out = runKernel("manifold_derivatives.comp", in);
-    double worst = 0, worstAbs = 0;
-    int bad = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-        ASSERT_NE(out.at(5 * i + 4, 0, 2), 0.0f) << "invalid configuration " << i;
-        for (int k = 0; k < 2; ++k) {
-            double fdH = (double(out.at(5 * i + 1, 0, k)) - out.at(5 * i, 0, k)) / (2 * h);
-            double fd = (double(out.at(5 * i + 3, 0, k)) - out.at(5 * i + 2, 0, k)) / h;
-            double an = out.at(5 * i + 4, 1, k);
-            double tol = std::abs(fdH - fd) + 1e-6 / (h / 2) + 1e-4 * std::abs(an);
-            worst = std::max(worst, std::abs(fd - an) / tol);
-            worstAbs = std::max(worstAbs, std::abs(fd - an));
-            if (std::abs(fd - an) > tol && bad++ < 5)
-                ADD_FAILURE() << "config " << i << (chains[i].reflection ? " reflection" : " refraction")
-                              << " component " << k << ": analytic " << an << " fd " << fd
-                              << " (fd at 2h " << fdH << ")";
+    expectDerivativesMatch(runKernel("manifold_derivatives.comp", in), n, h,
+                           "angle-difference derivative");
+}
+
+V rotate(V v, V k, double a) {  // Rodrigues, unit axis k
+    return std::cos(a) * v + std::sin(a) * cross(k, v) + ((1 - std::cos(a)) * dot(k, v)) * k;
+}
+
+TEST(ManifoldConstraints, HalfVectorDerivativeMatchesFiniteDifferences) {
+    // w_i and w_o turned towards random vectors, the tangent frame (s, t, n) rotated about a
+    // random axis: w(e) = normalize(w + e a), frame(e) = R_k(e) frame.
+    std::mt19937 rng(9);
+    struct Hv {
+        V wi, wo, n, s, t, a, b, k;
+        bool reflection;
+    };
+    std::vector<Hv> cs;
+    while (cs.size() < 192) {
+        Hv c;
+        c.n = randomDir(rng);
+        c.s = normalize(cross(c.n, randomDir(rng)));
+        c.t = cross(c.n, c.s);
+        c.wi = randomDir(rng);
+        c.reflection = cs.size() % 2 == 0;
+        if (c.reflection) {
+            if (dot(c.wi, c.n) < 0.1) continue;
+            c.wo = reflect(c.wi, c.n);
+        } else if (!refract(c.wi, c.n, 1.5, c.wo)) {
+            continue;
         }
+        if (std::abs(dot(c.wi, c.n)) < 0.1 || std::abs(dot(c.wo, c.n)) < 0.1) continue;
+        if (cs.size() % 3 == 2) c.wo = normalize(c.wo + 0.2 * randomDir(rng));
+        c.a = randomDir(rng);
+        c.b = randomDir(rng);
+        c.k = randomDir(rng);
+        cs.push_back(c);
     }
-    EXPECT_EQ(bad, 0);
-    std::printf("angle-difference derivative: worst |fd - analytic| %.3g, / tol %.3f, %u configs\n",
-                worstAbs, worst, n);
+    const double h = 1.6e-2;
+    uint32_t n = uint32_t(cs.size());
+    ImageData in = ImageData::make(5 * n, 9, 4);
+    double steps[5] = {-h, h, -h / 2, h / 2, 0};
+    for (uint32_t i = 0; i < n; ++i)
+        for (int j = 0; j < 5; ++j) {
+            const Hv& c = cs[i];
+            double e = steps[j];
+            V wi = normalize(c.wi + e * c.a), wo = normalize(c.wo + e * c.b);
+            V rows[9] = {wi,
+                         wo,
+                         rotate(c.n, c.k, e),
+                         rotate(c.s, c.k, e),
+                         rotate(c.t, c.k, e),
+                         c.a + (-dot(c.a, c.wi)) * c.wi,
+                         c.b + (-dot(c.b, c.wo)) * c.wo,
+                         cross(c.k, c.s),
+                         cross(c.k, c.t)};
+            for (uint32_t y = 0; y < 9; ++y) {
+                uint32_t x = 5 * i + j;
+                in.at(x, y, 0) = float(rows[y].x);
+                in.at(x, y, 1) = float(rows[y].y);
+                in.at(x, y, 2) = float(rows[y].z);
+                in.at(x, y, 3) = 0.0f;
+            }
+            in.at(5 * i + j, 2, 3) = 1.5f;
+            in.at(5 * i + j, 3, 3) = c.reflection ? 1.0f : 0.0f;
+        }
+    expectDerivativesMatch(runKernel("manifold_half_vector.comp", in), n, h,
+                           "half-vector derivative");
 }
 
 }  // namespace

@@ -164,4 +164,28 @@ vec2 half_vector_constraint(vec3 wi, vec3 wo, vec3 n, vec3 s, vec3 t, float eta,
     return vec2(dot(s, h), dot(t, h)) - offset_xy;
 }
 
+// Directional derivative of half_vector_constraint when w_i, w_o and the tangent frame (s, t)
+// move by dwi, dwo, ds, dt (the side of w_i, hence eta', is fixed): h = H / |H| with
+// H = w_i + w_o or -(w_i + eta' w_o), dh = (dH - h (h.dH)) / |H|.
+vec2 half_vector_constraint_derivative(vec3 wi, vec3 wo, vec3 n, vec3 s, vec3 t, float eta,
+                                       bool reflection, vec3 dwi, vec3 dwo, vec3 ds, vec3 dt) {
+    vec3 H, dH;
+    if (reflection) {
+        H = wi + wo;
+        dH = dwi + dwo;
+    } else {
+        float e = dot(wi, n) >= 0.0 ? eta : 1.0 / eta;
+        H = -(wi + e * wo);
+        dH = -(dwi + e * dwo);
+    }
+    float len = length(H);
+    vec3 h = H / len;
+    vec3 dh = (dH - h * dot(h, dH)) / len;
+    if (dot(h, n) < 0.0) {
+        h = -h;
+        dh = -dh;
+    }
+    return vec2(dot(ds, h) + dot(s, dh), dot(dt, h) + dot(t, dh));
+}
+
 #endif
