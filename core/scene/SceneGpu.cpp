@@ -32,7 +32,8 @@ struct TextureGpu {
 };
 struct LightGpu {
     uint32_t type, index;
-    float pmf, pad;
+    float pmf;
+    uint32_t flags;  // Light::flags (point/spot/directional/environment), shape flags (triangles)
     glm::vec4 p0, p1, p2;
 };
 struct CameraPoseGpu {
@@ -243,7 +244,7 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
             glm::uvec4 tri = triangles[t];
             float area = 0.5f * glm::length(glm::cross(positions[tri.y] - positions[tri.x],
                                                        positions[tri.z] - positions[tri.x]));
-            lights.push_back({kLightTriangle, t, 0.0f, 0.0f, {}, {}, {}});
+            lights.push_back({kLightTriangle, t, 0.0f, shape.flags, {}, {}, {}});
             power.push_back(float(M_PI) * luminance(shape.emission) * area);
             ++mStats.emissiveTriangles;
         }
@@ -251,6 +252,7 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     uint32_t envIndex = ~0u;
     for (const auto& l : s.lights) {
         LightGpu lg{};
+        lg.flags = l.flags;
         float p = 0.0f;
         float discArea = float(M_PI) * radius * radius;
         switch (l.type) {

@@ -55,5 +55,10 @@ ShaderDefines ShaderEnumRegistry::defines() const {
 // Core enums: the NEE/BSDF MIS heuristic of shaders/lib/mis.glsl.
 LOOM_REGISTER_SHADER_ENUM(MisHeuristic, "MIS_HEURISTIC", {"balance", "power"},
                           "MIS heuristic between light and BSDF sampling (Veach 1997)");
+// The specular constraint of shaders/lib/manifold (SMS, MNEE and the partitioned variants).
+LOOM_REGISTER_SHADER_ENUM(ManifoldConstraint, "MANIFOLD_CONSTRAINT",
+                          {"angle_difference", "half_vector"},
+                          "specular constraint: angle difference (Zeltner et al. 2020 Sec. 5.1) "
+                          "or half vector (Hanika et al. 2015)");
 
 }  // namespace loom

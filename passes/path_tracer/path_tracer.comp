@@ -3,7 +3,7 @@
 // MIS (Veach 1997), Russian roulette, thin lens, motion blur over the shutter. The baseline
 // every other estimator is tested against, so each strategy can be switched off.
 #include "lib/camera.glsl"
-#include "lib/integrator/nee.glsl"
+#include "lib/integrator/path.glsl"
 #include "lib/rng.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -81,87 +81,35 @@ void main() {
         vec3 o, d;
         camera_ray(cam, uv, u_lens, o, d);
 
-        vec3 L = vec3(0.0), L_direct = vec3(0.0);
-        vec3 beta = vec3(1.0);
-        float prev_pdf = 0.0;     // solid-angle pdf of the BSDF sample that led here
-        bool prev_delta = true;   // camera rays count as delta (no MIS at the first hit)
-        vec3 prev_p = o;
-        for (uint depth = 0u;; ++depth) {
-            Hit hit;
-            bool found;
+        Hit first;
+        first.t = 0.0;
+        first.prim = ~0u;
+        first.bary = vec2(0.0);
+        bool first_found = false;
+        bool given = false;
 #if HAS_VBUFFER
-            if (s == 0u && pc.sampleBase == 0u && depth == 0u) {
-                uvec4 v = imageLoad(vbufferImage, ivec2(pixel));
-                hit.prim = v.x;
-                hit.bary = uintBitsToFloat(v.yz);
-                hit.t = 0.0;  // unused: shading works from prim and bary
-                found = v.x != ~0u;
-            } else
-#endif
-            {
-                ++rays;
-                found = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit);
-            }
-            ShadingPoint sh;
-            if (found) sh = shading_point(hit);
-            // Emission hit by BSDF sampling (or seen directly), or the environment on a miss,
-            // MIS-weighted against light sampling.
-            vec3 Le = emitter_hit_radiance(d, found, sh);
-            if (any(greaterThan(Le, vec3(0.0)))) {
-                float w = 1.0;
-                if (!prev_delta && pc.strategy == STRATEGY_MIS)
-                    w = mis_weight(prev_pdf, emitter_hit_light_pdf(prev_p, d, found, hit.prim, sh),
-                                   pc.misHeuristic);
-                else if (!prev_delta && pc.strategy == STRATEGY_NEE)
-                    w = 0.0;
-                vec3 c = beta * Le * w;
-                L += c;
-                if (depth <= 1u) L_direct += c;
-            }
-            if (!found) break;
-            if (depth == 0u) {
-                first_albedo += sh.mat.diffuse.rgb;
-                first_normal += sh.n;
-            }
-            if (depth >= pc.maxBounces) break;
-
-            vec3 wo = shading_to_local(sh, -d);
-            uint flags = bsdf_flags(sh.mat);
-            bool has_smooth = (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
-
-            // Next-event estimation.
-            vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
-            if (has_smooth && pc.strategy != STRATEGY_BSDF) {
-                NeeSample nee = nee_sample(sh, wo, u_light, pc.strategy == STRATEGY_MIS, pc.misHeuristic);
-                if (nee.valid) {
-                    ++rays;
-                    if (!trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) {
-                        vec3 c = beta * nee.value;
-                        L += c;
-                        if (depth == 0u) L_direct += c;
-                    }
-                }
-            }
-
-            // BSDF sampling.
-            vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
-            BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
-            if (!bsdf_sample_valid(bs)) break;
-            beta *= bsdf_sample_weight(bs);
-            prev_delta = (bs.flags & BSDF_DELTA) != 0u;
-            prev_pdf = bs.pdf;
-            prev_p = sh.sp.p;
-            d = shading_to_world(sh, bs.wi);
-            o = offset_ray_origin(sh.sp.p, sh.sp.ng, d);
-
-            // Russian roulette on the throughput (unbiased: survivors are reweighted).
-            if (depth + 1u >= pc.rrDepth) {
-                float q = min(max(beta.r, max(beta.g, beta.b)), 0.95);
-                if (rng_next(rng) >= q) break;
-                beta /= q;
-            }
-            if (all(equal(beta, vec3(0.0)))) break;
+        if (s == 0u && pc.sampleBase == 0u) {
+            uvec4 v = imageLoad(vbufferImage, ivec2(pixel));
+            first.prim = v.x;
+            first.bary = uintBitsToFloat(v.yz);
+            first.t = 0.0;  // unused: shading works from prim and bary
+            first_found = v.x != ~0u;
+            given = true;
         }
+#endif
+        PathSettings ps;
+        ps.max_bounces = pc.maxBounces;
+        ps.rr_depth = pc.rrDepth;
+        ps.mis_heuristic = pc.misHeuristic;
+        ps.nee = pc.strategy != STRATEGY_BSDF;
+        ps.mis = pc.strategy == STRATEGY_MIS;
+        ps.covered_max_chain = 0u;
+        ps.covered_depth = 0u;
+        PathRadiance pr = path_trace(o, d, given, first, first_found, ps, rng);
+        rays += pr.rays;
+        vec3 L = pr.L, L_direct = pr.L_direct;
+        first_albedo += pr.albedo;
+        first_normal += pr.normal;
         if (pc.clamp > 0.0) L = min(L, vec3(pc.clamp));
         sum += L;
         sum_direct += L_direct;

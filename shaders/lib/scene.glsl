@@ -17,6 +17,17 @@ struct ShapeGpu {
     uint first_triangle;  // triangles of a shape are contiguous
     vec4 emission;        // rgb radiance, w = 1 when the shape has UVs
 };
+// ShapeGpu.flags, mirrored from loom::scene::ShapeFlags (Scene.h): ray visibility and the SMS
+// tags of casters, receivers, bouncers and emitters.
+const uint SHAPE_VISIBLE_CAMERA = 1u << 0;
+const uint SHAPE_VISIBLE_SHADOW = 1u << 1;
+const uint SHAPE_CAUSTIC_CASTER_REFLECT = 1u << 2;
+const uint SHAPE_CAUSTIC_CASTER_REFRACT = 1u << 3;
+const uint SHAPE_CAUSTIC_CASTER = SHAPE_CAUSTIC_CASTER_REFLECT | SHAPE_CAUSTIC_CASTER_REFRACT;
+const uint SHAPE_CAUSTIC_RECEIVER = 1u << 4;
+const uint SHAPE_CAUSTIC_EMITTER = 1u << 5;
+const uint SHAPE_CAUSTIC_BOUNCER = 1u << 6;
+const uint SHAPE_CAUSTIC_MULTI = 1u << 7;
 struct TextureGpu {
     uint offset;  // first texel in scene_texels
     uint width;
@@ -31,7 +42,7 @@ struct LightGpu {
     uint type;   // LIGHT_*
     uint index;  // triangle id / texture id
     float pmf;   // selection probability
-    float pad;
+    uint flags;  // the shape's flags (triangles), else the light's (SHAPE_CAUSTIC_EMITTER)
     vec4 p0;     // point/spot: position; directional: direction towards the light
     vec4 p1;     // intensity (point/spot, W/sr), irradiance (directional), scale (env)
     vec4 p2;     // spot: axis xyz, w = cos(cutoff); p0.w = cos(beam width)

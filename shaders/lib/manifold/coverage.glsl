@@ -1,0 +1,81 @@
+// Which light paths specular manifold sampling produces, in one place: the SMS estimators
+// (manifold/sms.glsl) build exactly these chains, and a path tracer combined with them drops
+// exactly these paths (integrator/path.glsl), so that nothing is counted twice or lost. The
+// reference code (Zeltner et al. 2020) instead skips all caster-to-light transport after
+// depth 1, which also loses caustics seen from non-receivers.
+//
+// A covered path, from the camera: a receiver vertex x0 (tagged caustic_receiver, not a
+// caster, with a diffuse or glossy lobe) at the depth SMS runs at, then 1..maxChain specular
+// vertices that the walk models (x1 on a caster, later ones on casters or bouncers; refraction
+// through smooth dielectrics, reflection off smooth conductors), then an emitter tagged
+// caustic_emitter, reached directly by the last segment.
+#ifndef LOOM_MANIFOLD_COVERAGE_GLSL
+#define LOOM_MANIFOLD_COVERAGE_GLSL
+
+#include "lib/bsdf.glsl"
+#include "lib/manifold/walk.glsl"
+#include "lib/shading.glsl"
+
+bool manifold_receiver(uint shape_flags, Material m) {
+    return (shape_flags & SHAPE_CAUSTIC_RECEIVER) != 0u &&
+           (shape_flags & SHAPE_CAUSTIC_CASTER) == 0u &&
+           (bsdf_flags(m) & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
+}
+
+// Whether a surface can hold chain vertex `index` (0 = first after x0).
+bool manifold_chain_surface(uint shape_flags, Material m, uint index) {
+    uint tags = index == 0u ? SHAPE_CAUSTIC_CASTER : SHAPE_CAUSTIC_CASTER | SHAPE_CAUSTIC_BOUNCER;
+    return (shape_flags & tags) != 0u && manifold_material_specular(m);
+}
+
+// Whether a sampled delta lobe is the one the walk takes there (refraction through
+// dielectrics, reflection off conductors).
+bool manifold_chain_lobe(Material m, uint bsdf_sample_flags) {
+    uint want = material_type(m) == MATERIAL_CONDUCTOR ? BSDF_REFLECTION : BSDF_TRANSMISSION;
+    return (bsdf_sample_flags & want) != 0u && (bsdf_sample_flags & BSDF_DELTA) != 0u;
+}
+
+// A light SMS samples (its entry's flags carry the shape's or the light's tags).
+bool manifold_emitter_light(uint light) {
+    return (scene_lights[light].flags & SHAPE_CAUSTIC_EMITTER) != 0u;
+}
+
+// Tracks, along a camera path, whether the vertices since the receiver form a covered chain.
+struct ManifoldCoverage {
+    uint chain_length;  // specular chain vertices since the receiver
+    bool open;    // the path so far is receiver (+ chain): still a covered prefix
+};
+
+ManifoldCoverage manifold_coverage_none() {
+    ManifoldCoverage c;
+    c.chain_length = 0u;
+    c.open = false;
+    return c;
+}
+
+// At a path vertex sh (path depth `depth`) that scatters with sample flags `sample_flags`:
+// opens the chain at a receiver of depth receiver_depth, extends or closes it elsewhere.
+ManifoldCoverage manifold_coverage_step(ManifoldCoverage c, ShadingPoint sh, uint depth,
+                                        uint receiver_depth, uint max_chain, uint sample_flags) {
+    if (max_chain == 0u) return manifold_coverage_none();
+    if (depth == receiver_depth) {
+        // SMS evaluates the receiver's smooth lobes only: a delta lobe (a plastic's coat)
+        // leaving it starts no covered path.
+        c.open = manifold_receiver(sh.shape_flags, sh.mat) && (sample_flags & BSDF_DELTA) == 0u;
+        c.chain_length = 0u;
+        return c;
+    }
+    if (!c.open) return c;
+    c.open = c.chain_length < max_chain && manifold_chain_surface(sh.shape_flags, sh.mat, c.chain_length) &&
+             manifold_chain_lobe(sh.mat, sample_flags);
+    c.chain_length += 1u;
+    return c;
+}
+
+// Whether the emitter the path reached after c (a triangle of shape flags `emitter_flags`)
+// closes a covered path.
+bool manifold_coverage_covers(ManifoldCoverage c, uint emitter_flags) {
+    return c.open && c.chain_length >= 1u && (emitter_flags & SHAPE_CAUSTIC_EMITTER) != 0u;
+}
+
+#endif

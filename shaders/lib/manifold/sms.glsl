@@ -1,0 +1,305 @@
+// One specular manifold sampling trial (Zeltner et al. 2020, Alg. 1 and Sec. 4.3; MNEE seeding
+// after Hanika et al. 2015) as a state machine: a seed chain is traced, walked to the manifold by
+// Newton steps with re-projection, and its last segment tested for visibility. Every ray of a
+// trial comes out of manifold_trial_ray and goes back through manifold_trial_advance, so a
+// kernel traces all of them at one call site (shaders/lib/README.md rule 4) and can stop between
+// trials to stay under lavapipe's loop limit (rule 5). The estimators (unbiased with Bernoulli
+// trials, biased, MNEE) are built from trials by the caustic passes.
+#ifndef LOOM_MANIFOLD_SMS_GLSL
+#define LOOM_MANIFOLD_SMS_GLSL
+
+#include "lib/bsdf.glsl"
+#include "lib/bvh.glsl"
+#include "lib/lights.glsl"
+#include "lib/manifold/coverage.glsl"
+#include "lib/manifold/walk.glsl"
+#include "lib/sampling.glsl"
+#include "lib/shading.glsl"
+
+// Seeds: the caster triangles with an inclusive area CDF (x = triangle, y = floatBits(cdf)),
+// built by the pass from the scene's caustic_caster tags.
+layout(std430) readonly buffer ManifoldCasters { uvec2 manifold_casters[]; };
+
+struct ManifoldSettings {
+    uint constraint;         // MANIFOLD_CONSTRAINT_*
+    uint max_iterations;     // Newton steps per walk, halvings included
+    float solver_threshold;  // convergence: every |C_i| below this
+    float min_segment;       // shorter chain segments fail (scene-scale dependent)
+    uint max_chain;          // specular vertices a chain may have (<= MANIFOLD_MAX_VERTICES)
+};
+
+// A point on a caster, uniform by area over all casters.
+vec3 manifold_sample_caster(vec3 u) {
+    uint lo = 0u, hi = uint(manifold_casters.length()) - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (u.z < uintBitsToFloat(manifold_casters[mid].y)) hi = mid;
+        else lo = mid + 1u;
+    }
+    vec3 a, b, c;
+    triangle_positions(manifold_casters[lo].x, a, b, c);
+    float su = sqrt(u.x);
+    return (1.0 - su) * a + su * (1.0 - u.y) * b + su * u.y * c;
+}
+
+// The light end of a chain: a point sampled by area on an emissive triangle (pdf per area,
+// selection included), or a point or spot light (pdf = selection probability).
+struct ManifoldLight {
+    vec3 y;
+    vec3 n;      // unit normal of an area light, 0 for point lights
+    vec3 s, t;   // orthonormal basis of the area light's plane
+    float pdf;
+    uint light;  // index into scene_lights
+    bool point;
+    bool valid;  // false: no light SMS can connect to (untagged, directional, environment)
+};
+
+ManifoldLight manifold_sample_light(vec3 u) {
+    ManifoldLight ml;
+    ml.valid = false;
+    ml.point = false;
+    ml.pdf = 0.0;
+    ml.y = vec3(0.0);
+    ml.n = vec3(0.0);
+    ml.s = vec3(0.0);
+    ml.t = vec3(0.0);
+    ml.light = 0u;
+    if (light_count() == 0u) return ml;
+    uint li = select_light(u.z);
+    ml.light = li;
+    LightGpu l = scene_lights[li];
+    if (!manifold_emitter_light(li) || !(l.pmf > 0.0)) return ml;
+    if (l.type == LIGHT_TRIANGLE) {
+        vec3 a, b, c;
+        triangle_positions(l.index, a, b, c);
+        float su = sqrt(u.x);
+        ml.y = (1.0 - su) * a + su * (1.0 - u.y) * b + su * u.y * c;
+        vec3 cr = cross(b - a, c - a);
+        float area = 0.5 * length(cr);
+        if (!(area > 0.0)) return ml;
+        ml.n = normalize(cr);
+        ml.s = normalize(b - a);
+        ml.t = cross(ml.n, ml.s);
+        ml.pdf = l.pmf / area;
+        ml.valid = true;
+    } else if (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) {
+        ml.y = l.p0.xyz;
+        ml.pdf = l.pmf;
+        ml.point = true;
+        ml.valid = true;
+    }
+    return ml;
+}
+
+const uint TRIAL_SEED = 0u;       // tracing the seed chain
+const uint TRIAL_RETRACE = 1u;    // re-tracing the chain from a proposed first vertex
+const uint TRIAL_SHADOW = 2u;     // visibility of the last segment towards y
+const uint TRIAL_CONVERGED = 3u;  // a valid, visible solution
+const uint TRIAL_FAILED = 4u;
+
+struct ManifoldTrial {
+    ManifoldChain chain;     // the accepted chain
+    ManifoldChain proposal;  // the chain being traced
+    uint phase;
+    bool straight;           // MNEE seed: the straight line x0 -> y, no scattering
+    vec3 x0, ng0;            // the receiver point and its geometric normal
+    vec3 y, ny;              // the light point (ny = 0: a point light)
+    vec3 ray_o, ray_d;       // the ray to trace next
+    float ray_tmax;
+    uint iterations;         // Newton steps taken (halvings included)
+    float beta;              // step size
+    vec2 step;               // the current Newton step of the first vertex
+};
+
+bool manifold_trial_running(ManifoldTrial tr) { return tr.phase < TRIAL_CONVERGED; }
+
+void manifold_trial_ray_towards(inout ManifoldTrial tr, vec3 p, vec3 ng, vec3 target) {
+    vec3 d = normalize(target - p);
+    tr.ray_o = offset_ray_origin(p, ng, d);
+    tr.ray_d = d;
+    tr.ray_tmax = 1e30;
+}
+
+// Starts a trial from x0 towards seed (SMS: a point on a caster, scattered onwards) or along the
+// straight line to y (straight, MNEE).
+ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, bool straight, vec3 seed) {
+    ManifoldTrial tr;
+    tr.phase = TRIAL_SEED;
+    tr.straight = straight;
+    tr.x0 = x0;
+    tr.ng0 = ng0;
+    tr.y = y;
+    tr.ny = ny;
+    tr.iterations = 0u;
+    tr.beta = 1.0;
+    tr.step = vec2(0.0);
+    tr.chain.k = 0u;
+    tr.proposal.k = 0u;
+    manifold_trial_ray_towards(tr, x0, ng0, straight ? y : seed);
+    if (straight) tr.ray_tmax = length(y - tr.ray_o) * (1.0 - 1e-4);
+    return tr;
+}
+
+void manifold_trial_propose(inout ManifoldTrial tr) {
+    tr.iterations += 1u;
+    manifold_trial_ray_towards(tr, tr.x0, tr.ng0, manifold_step_target(tr.chain, tr.step, tr.beta));
+    tr.proposal.k = 0u;
+    tr.phase = TRIAL_RETRACE;
+}
+
+// At an accepted chain: converged (then the shadow ray), or the next Newton step.
+void manifold_trial_evaluate(inout ManifoldTrial tr, ManifoldSettings ms) {
+    float error;
+    if (!manifold_newton_step(ms.constraint, tr.chain, tr.x0, tr.y, tr.step, error)) {
+        // Singular or undefined, unless already on the manifold.
+        if (!(error >= 0.0 && error < ms.solver_threshold)) {
+            tr.phase = TRIAL_FAILED;
+            return;
+        }
+    }
+    if (error < ms.solver_threshold) {
+        if (!manifold_chain_types_valid(tr.chain, tr.x0, tr.y, ms.min_segment)) {
+            tr.phase = TRIAL_FAILED;
+            return;
+        }
+        ManifoldVertex last = tr.chain.v[tr.chain.k - 1u];
+        ShadowRay r = shadow_ray_between(last.p, last.ng, tr.y, tr.ny);
+        tr.ray_o = r.o;
+        tr.ray_d = r.d;
+        tr.ray_tmax = r.tmax;
+        tr.phase = TRIAL_SHADOW;
+        return;
+    }
+    if (tr.iterations >= ms.max_iterations) {
+        tr.phase = TRIAL_FAILED;
+        return;
+    }
+    manifold_trial_propose(tr);
+}
+
+// A proposal that left the shape sequence (miss, other shape, total internal reflection):
+// halve the step (one of the max_iterations).
+void manifold_trial_reject(inout ManifoldTrial tr, ManifoldSettings ms) {
+    tr.beta *= 0.5;
+    if (tr.iterations >= ms.max_iterations) tr.phase = TRIAL_FAILED;
+    else manifold_trial_propose(tr);
+}
+
+// Continues the chain being traced past its last vertex v (index i): scatter specularly.
+bool manifold_trial_scatter_on(inout ManifoldTrial tr, ManifoldChain c, uint i) {
+    ManifoldVertex v = c.v[i];
+    vec3 prev = i == 0u ? tr.x0 : c.v[i - 1u].p;
+    SpecularScatter s = manifold_scatter(v, normalize(prev - v.p));
+    if (!s.valid) return false;
+    tr.ray_o = offset_ray_origin(v.p, v.ng, s.w);
+    tr.ray_d = s.w;
+    tr.ray_tmax = 1e30;
+    return true;
+}
+
+// The seed chain is complete: start the walk.
+void manifold_trial_begin_walk(inout ManifoldTrial tr, ManifoldSettings ms) {
+    if (tr.proposal.k == 0u) {
+        tr.phase = TRIAL_FAILED;
+        return;
+    }
+    tr.chain = tr.proposal;
+    manifold_choose_frames(tr.chain, tr.y);
+    manifold_trial_evaluate(tr, ms);
+}
+
+// Feeds the result of tracing the trial's ray (found, hit) back.
+void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, ManifoldSettings ms) {
+    if (tr.phase == TRIAL_SHADOW) {
+        tr.phase = found ? TRIAL_FAILED : TRIAL_CONVERGED;
+        return;
+    }
+    uint i = tr.proposal.k;
+    if (tr.phase == TRIAL_SEED) {
+        if (!found) {
+            // The straight line reached y; the scattered seed left the scene.
+            manifold_trial_begin_walk(tr, ms);
+            return;
+        }
+        ShapeGpu shape = scene_shapes[scene_triangles[hit.prim].w];
+        bool chain_surface =
+            manifold_chain_surface(shape.flags, scene_materials[shape.material], i);
+        if (!chain_surface) {
+            // MNEE: a blocker on the line fails; SMS: the scattered chain ends here.
+            if (tr.straight || i == 0u) tr.phase = TRIAL_FAILED;
+            else manifold_trial_begin_walk(tr, ms);
+            return;
+        }
+        if (i >= ms.max_chain) {
+            tr.phase = TRIAL_FAILED;
+            return;
+        }
+        tr.proposal.v[i] = manifold_vertex(hit.prim, hit.bary);
+        tr.proposal.k = i + 1u;
+        if (tr.straight) {
+            ManifoldVertex v = tr.proposal.v[i];
+            tr.ray_o = offset_ray_origin(v.p, v.ng, tr.ray_d);
+            tr.ray_tmax = length(tr.y - tr.ray_o) * (1.0 - 1e-4);
+        } else if (!manifold_trial_scatter_on(tr, tr.proposal, i)) {
+            tr.phase = TRIAL_FAILED;
+        }
+        return;
+    }
+    // TRIAL_RETRACE: vertex i of the proposal must be on the accepted chain's shape i.
+    if (!found || scene_triangles[hit.prim].w != tr.chain.v[i].shape) {
+        manifold_trial_reject(tr, ms);
+        return;
+    }
+    tr.proposal.v[i] = manifold_vertex(hit.prim, hit.bary);
+    tr.proposal.k = i + 1u;
+    if (tr.proposal.k == tr.chain.k) {
+        for (uint j = 0u; j < tr.chain.k; ++j) tr.chain.v[j] = tr.proposal.v[j];
+        tr.beta = min(1.0, 2.0 * tr.beta);
+        manifold_trial_evaluate(tr, ms);
+        return;
+    }
+    if (!manifold_trial_scatter_on(tr, tr.proposal, i)) manifold_trial_reject(tr, ms);
+}
+
+// Direction of a solution's first segment, which identifies it (Zeltner Sec. 4.3: two trials
+// found the same solution when these agree to the uniqueness threshold).
+vec3 manifold_trial_direction(ManifoldTrial tr) { return normalize(tr.chain.v[0].p - tr.x0); }
+
+bool manifold_same_solution(vec3 a, vec3 b, float uniqueness_threshold) {
+    return abs(dot(a, b) - 1.0) < uniqueness_threshold;
+}
+
+// The contribution f T Le G / pdf of a converged trial at the receiver sh0 (outgoing direction
+// wo in its local frame), without the estimator's weight (K, 1). geometric_clamp > 0 clamps
+// the generalized geometric term (biased; the reference code clamps it for directional
+// lights and the single-scatter determinant at 1).
+vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingPoint sh0,
+                                 vec3 wo, ManifoldLight ml, float geometric_clamp) {
+    ManifoldChain c = tr.chain;
+    vec3 wi = normalize(c.v[0].p - tr.x0);
+    vec3 wi_local = shading_to_local(sh0, wi);
+    vec3 f = bsdf_eval(sh0.mat, wo, wi_local);
+    if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
+    vec3 T = manifold_chain_throughput(c, tr.x0);
+    ManifoldVertex last = c.v[c.k - 1u];
+    vec3 L;
+    float G;
+    if (ml.point) {
+        // Irradiance I d omega_y / dA_x0 times the BSDF without its cosine (f is f |cos|).
+        vec3 w;
+        float dist;
+        vec3 Li = point_light_incident(scene_lights[ml.light], last.p, w, dist);
+        L = Li * dist * dist / max(abs(wi_local.z), 1e-8);
+        vec3 xs = normalize(sh0.sp.dp_du), xt = cross(sh0.sp.ng, xs);
+        G = manifold_geometric_term_point(ms.constraint, c, tr.x0, tr.y, xs, xt);
+    } else {
+        L = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n,
+                             normalize(tr.y - last.p));
+        G = manifold_geometric_term_area(ms.constraint, c, tr.x0, tr.y, ml.s, ml.t);
+    }
+    if (geometric_clamp > 0.0) G = min(G, geometric_clamp);
+    vec3 v = f * T * L * (G / ml.pdf);
+    return any(isnan(v)) || any(isinf(v)) ? vec3(0.0) : v;
+}
+
+#endif

@@ -1,0 +1,337 @@
+// The Newton walk on a specular manifold (Zeltner et al. 2020 Sec. 4.3 and 5; Jakob & Marschner
+// 2012 Sec. 4) without ray tracing: chain vertices with their differential geometry, the
+// constraints of a chain x0 -> x1 .. xk -> y with fixed end points, their block-tridiagonal
+// Jacobian and its block Thomas solve, the step of the first vertex, the generalized geometric
+// term and the chain's throughput. Tracing (re-projection, seeds, visibility) is the caller's:
+// manifold/sms.glsl runs every ray of a trial through one call site.
+//
+// Each vertex moves in the plane of its triangle, parameterised by an orthonormal basis (s, t)
+// of that plane: steps, Jacobian blocks and determinants are in world units, so thresholds do
+// not depend on how finely a mesh is tessellated.
+#ifndef LOOM_MANIFOLD_WALK_GLSL
+#define LOOM_MANIFOLD_WALK_GLSL
+
+#include "lib/fresnel.glsl"
+#include "lib/manifold/constraints.glsl"
+#include "lib/material.glsl"
+#include "lib/scene.glsl"
+#include "lib/shading.glsl"
+
+// Specular vertices a chain may have (two refractions through a slab or a sphere, short
+// reflection chains).
+#define MANIFOLD_MAX_VERTICES 4
+
+struct ManifoldVertex {
+    vec3 p;
+    vec3 ng;            // geometric normal (unit)
+    vec3 n;             // shading normal the constraint scatters about (interpolated)
+    vec3 s, t;          // orthonormal basis of the triangle plane: the vertex's parameters
+    vec3 dn_ds, dn_dt;  // derivatives of n along s and t
+    vec3 tangent;       // fixed reference (dp/du) of the half-vector frame
+    vec3 specular;      // specular reflectance (conductor) or transmittance (dielectric)
+    vec3 cond_eta, cond_k;
+    float eta;          // int / ext IOR (dielectric)
+    uint prim;
+    uint shape;
+    bool reflection;    // conductor: mirror reflection; dielectric: refraction
+    bool two_sided;
+};
+
+// Whether a shape's material scatters as a manifold walk models it: smooth conductors reflect,
+// smooth dielectrics refract (the walk's chains never reflect off glass).
+bool manifold_material_specular(Material m) {
+    uint t = material_type(m);
+    return t == MATERIAL_CONDUCTOR || t == MATERIAL_DIELECTRIC;
+}
+
+ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
+    SurfacePoint sp = surface_point(prim, bary);
+    Material m = scene_materials[scene_shapes[sp.shape].material];
+    ManifoldVertex v;
+    v.p = sp.p;
+    v.ng = sp.ng;
+    v.n = sp.ns;
+    v.prim = prim;
+    v.shape = sp.shape;
+    v.s = normalize(sp.dp_du);
+    v.t = cross(sp.ng, v.s);
+    // (du, dv) of a unit move along s or t: [dp_du dp_dv] (du, dv) = s (exact: s is in-plane).
+    float g11 = dot(sp.dp_du, sp.dp_du), g12 = dot(sp.dp_du, sp.dp_dv), g22 = dot(sp.dp_dv, sp.dp_dv);
+    float inv = 1.0 / (g11 * g22 - g12 * g12);
+    vec2 rs = vec2(dot(sp.dp_du, v.s), dot(sp.dp_dv, v.s)), rt = vec2(dot(sp.dp_du, v.t), dot(sp.dp_dv, v.t));
+    vec2 uv_s = inv * vec2(g22 * rs.x - g12 * rs.y, g11 * rs.y - g12 * rs.x);
+    vec2 uv_t = inv * vec2(g22 * rt.x - g12 * rt.y, g11 * rt.y - g12 * rt.x);
+    v.dn_ds = sp.dn_du * uv_s.x + sp.dn_dv * uv_s.y;
+    v.dn_dt = sp.dn_du * uv_t.x + sp.dn_dv * uv_t.y;
+    v.tangent = sp.dp_du;
+    v.reflection = material_type(m) == MATERIAL_CONDUCTOR;
+    v.two_sided = material_two_sided(m);
+    v.specular = v.reflection ? m.specular.rgb : m.transmittance.rgb;
+    v.cond_eta = m.cond_eta.rgb;
+    v.cond_k = m.cond_k.rgb;
+    v.eta = material_eta(m);
+    return v;
+}
+
+// Specular scattering of w (unit, away from the vertex) as the chain scatters at v.
+SpecularScatter manifold_scatter(ManifoldVertex v, vec3 w) {
+    return v.reflection ? specular_reflect(w, v.n) : specular_refract(w, v.n, v.eta);
+}
+
+// Constraint kinds (MANIFOLD_CONSTRAINT_* choice indices, registered by passes/sms).
+// The half-vector frame at v: s_h = normalize(T - n (n.T)), t_h = n x s_h, and its derivative
+// along a normal change dn.
+void manifold_half_vector_frame(ManifoldVertex v, vec3 n, vec3 dn, out vec3 sh, out vec3 th,
+                                out vec3 dsh, out vec3 dth) {
+    vec3 a = v.tangent - n * dot(n, v.tangent);
+    float len = length(a);
+    sh = a / len;
+    th = cross(n, sh);
+    vec3 da = -(dn * dot(n, v.tangent) + n * dot(dn, v.tangent));
+    dsh = manifold_d_normalize(sh, len, da);
+    dth = cross(dn, sh) + cross(n, dsh);
+}
+
+// Constraint of vertex v between x_prev and x_next (kind: a MANIFOLD_CONSTRAINT_* index).
+vec2 manifold_constraint(uint kind, vec3 x_prev, ManifoldVertex v, vec3 x_next, mat3 frame,
+                         out bool valid) {
+    if (kind == MANIFOLD_CONSTRAINT_HALF_VECTOR) {
+        vec3 sh, th, dsh, dth;
+        manifold_half_vector_frame(v, v.n, vec3(0.0), sh, th, dsh, dth);
+        valid = true;
+        return half_vector_constraint(normalize(x_prev - v.p), normalize(x_next - v.p), v.n, sh,
+                                      th, v.eta, v.reflection, vec2(0.0));
+    }
+    return angle_difference_constraint_at(x_prev, v.p, x_next, v.n, v.eta, v.reflection, frame,
+                                          valid);
+}
+
+// Its directional derivative when x_prev, v (with its normal) and x_next move by dx_prev, dx,
+// dn, dx_next.
+vec2 manifold_constraint_derivative(uint kind, vec3 x_prev, ManifoldVertex v, vec3 x_next,
+                                    mat3 frame, vec3 dx_prev, vec3 dx, vec3 dn, vec3 dx_next) {
+    if (kind == MANIFOLD_CONSTRAINT_HALF_VECTOR) {
+        vec3 di = x_prev - v.p, dout = x_next - v.p;
+        vec3 wi = normalize(di), wo = normalize(dout);
+        vec3 dwi = manifold_d_normalize(wi, length(di), dx_prev - dx);
+        vec3 dwo = manifold_d_normalize(wo, length(dout), dx_next - dx);
+        vec3 sh, th, dsh, dth;
+        manifold_half_vector_frame(v, v.n, dn, sh, th, dsh, dth);
+        return half_vector_constraint_derivative(wi, wo, v.n, sh, th, v.eta, v.reflection, dwi,
+                                                 dwo, dsh, dth);
+    }
+    return angle_difference_constraint_derivative(x_prev, v.p, x_next, v.n, v.eta, v.reflection,
+                                                  frame, dx_prev, dx, dn, dx_next);
+}
+
+// The chain x0 -> v[0] .. v[k-1] -> y and what a Newton step needs of it.
+struct ManifoldChain {
+    ManifoldVertex v[MANIFOLD_MAX_VERTICES];
+    mat3 frame[MANIFOLD_MAX_VERTICES];  // angle-difference frames, chosen from the seed
+    uint k;
+};
+
+vec3 manifold_chain_prev(ManifoldChain c, uint i, vec3 x0) { return i == 0u ? x0 : c.v[i - 1u].p; }
+vec3 manifold_chain_next(ManifoldChain c, uint i, vec3 y) { return i + 1u == c.k ? y : c.v[i + 1u].p; }
+
+// Picks each vertex's angle frame from its current w_o (once per walk: the pole stays away
+// from where the walk starts; see manifold_angle_frame).
+void manifold_choose_frames(inout ManifoldChain c, vec3 y) {
+    for (uint i = 0u; i < c.k; ++i)
+        c.frame[i] = manifold_angle_frame(normalize(manifold_chain_next(c, i, y) - c.v[i].p));
+}
+
+// Largest |C_i| of the chain (-1 when a constraint is undefined there).
+float manifold_chain_error(uint kind, ManifoldChain c, vec3 x0, vec3 y) {
+    float e = 0.0;
+    for (uint i = 0u; i < c.k; ++i) {
+        bool valid;
+        vec2 C = manifold_constraint(kind, manifold_chain_prev(c, i, x0), c.v[i],
+                                     manifold_chain_next(c, i, y), c.frame[i], valid);
+        if (!valid) return -1.0;
+        e = max(e, length(C));
+    }
+    return e;
+}
+
+// The Jacobian blocks of constraint row i: A = dC_i/d(s,t)_{i-1}, B = dC_i/d(s,t)_i,
+// Cn = dC_i/d(s,t)_{i+1} (columns: motion along s, along t); and the residual C_i.
+void manifold_row(uint kind, ManifoldChain c, uint i, vec3 x0, vec3 y, out mat2 A, out mat2 B,
+                  out mat2 Cn, out vec2 C, out bool valid) {
+    vec3 xp = manifold_chain_prev(c, i, x0), xn = manifold_chain_next(c, i, y);
+    ManifoldVertex v = c.v[i];
+    C = manifold_constraint(kind, xp, v, xn, c.frame[i], valid);
+    vec3 z = vec3(0.0);
+    B = mat2(manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, v.s, v.dn_ds, z),
+             manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, v.t, v.dn_dt, z));
+    A = mat2(0.0);
+    Cn = mat2(0.0);
+    if (i > 0u) {
+        ManifoldVertex u = c.v[i - 1u];
+        A = mat2(manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], u.s, z, z, z),
+                 manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], u.t, z, z, z));
+    }
+    if (i + 1u < c.k) {
+        ManifoldVertex w = c.v[i + 1u];
+        Cn = mat2(manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, z, z, w.s),
+                  manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, z, z, w.t));
+    }
+}
+
+// A 2x2 block is singular when |det| is tiny against its scale (relative, so that the test is
+// the same at any scene scale; the reference code's absolute 1e-6 is for unit-size scenes).
+bool manifold_block_singular(mat2 m) {
+    float scale = dot(m[0], m[0]) + dot(m[1], m[1]);
+    float d = determinant(m);
+    return !(abs(d) > 1e-7 * scale) || isinf(d) || isnan(d);
+}
+
+// Solves the block-tridiagonal system A_i X_{i-1} + B_i X_i + Cn_i X_{i+1} = R_i for k rows
+// (block Thomas algorithm; each right-hand side is a 2x2 block: two columns at once).
+bool manifold_block_solve(uint k, mat2 A[MANIFOLD_MAX_VERTICES], mat2 B[MANIFOLD_MAX_VERTICES],
+                          mat2 Cn[MANIFOLD_MAX_VERTICES], mat2 R[MANIFOLD_MAX_VERTICES],
+                          out mat2 X[MANIFOLD_MAX_VERTICES]) {
+    mat2 Bp[MANIFOLD_MAX_VERTICES], Rp[MANIFOLD_MAX_VERTICES];
+    for (uint i = 0u; i < MANIFOLD_MAX_VERTICES; ++i) X[i] = mat2(0.0);
+    Bp[0] = B[0];
+    Rp[0] = R[0];
+    for (uint i = 1u; i < k; ++i) {
+        if (manifold_block_singular(Bp[i - 1u])) return false;
+        mat2 M = A[i] * inverse(Bp[i - 1u]);
+        Bp[i] = B[i] - M * Cn[i - 1u];
+        Rp[i] = R[i] - M * Rp[i - 1u];
+    }
+    if (manifold_block_singular(Bp[k - 1u])) return false;
+    X[k - 1u] = inverse(Bp[k - 1u]) * Rp[k - 1u];
+    for (int i = int(k) - 2; i >= 0; --i) X[i] = inverse(Bp[i]) * (Rp[i] - Cn[i] * X[i + 1]);
+    return true;
+}
+
+// The Newton step of the first vertex: dX = J^-1 C (only the first block is used; the caller
+// re-traces the rest of the chain from the moved first vertex). Returns the residual's norm in
+// `error` (max over rows); false when a constraint is undefined or J is singular.
+bool manifold_newton_step(uint kind, ManifoldChain c, vec3 x0, vec3 y, out vec2 step,
+                          out float error) {
+    mat2 A[MANIFOLD_MAX_VERTICES], B[MANIFOLD_MAX_VERTICES], Cn[MANIFOLD_MAX_VERTICES],
+        R[MANIFOLD_MAX_VERTICES], X[MANIFOLD_MAX_VERTICES];
+    error = 0.0;
+    step = vec2(0.0);
+    for (uint i = 0u; i < MANIFOLD_MAX_VERTICES; ++i) {
+        A[i] = mat2(0.0);
+        B[i] = mat2(1.0);
+        Cn[i] = mat2(0.0);
+        R[i] = mat2(0.0);
+    }
+    for (uint i = 0u; i < c.k; ++i) {
+        vec2 C;
+        bool valid;
+        manifold_row(kind, c, i, x0, y, A[i], B[i], Cn[i], C, valid);
+        if (!valid) {
+            error = -1.0;
+            return false;
+        }
+        error = max(error, length(C));
+        R[i] = mat2(C, vec2(0.0));
+    }
+    if (!manifold_block_solve(c.k, A, B, Cn, R, X)) return false;
+    step = X[0][0];
+    return true;
+}
+
+// Where the first vertex moves for step size beta: p - beta (s dX0 + t dX1) (Zeltner Sec. 4.3).
+vec3 manifold_step_target(ManifoldChain c, vec2 step, float beta) {
+    return c.v[0].p - beta * (c.v[0].s * step.x + c.v[0].t * step.y);
+}
+
+// Whether the converged chain scatters the way its materials do: at a reflection both
+// neighbours lie on the same side of the geometric normal, at a refraction on opposite sides
+// (the half-vector constraint also vanishes for the other type), with no segment shorter
+// than min_length.
+bool manifold_chain_types_valid(ManifoldChain c, vec3 x0, vec3 y, float min_length) {
+    for (uint i = 0u; i < c.k; ++i) {
+        vec3 a = manifold_chain_prev(c, i, x0) - c.v[i].p, b = manifold_chain_next(c, i, y) - c.v[i].p;
+        if (length(a) < min_length || length(b) < min_length) return false;
+        bool same_side = dot(a, c.v[i].ng) * dot(b, c.v[i].ng) > 0.0;
+        if (same_side != c.v[i].reflection) return false;
+    }
+    return true;
+}
+
+// |det(d(s,t)_first / d(s,t)_light)| when the chain's end point y moves in the plane with
+// orthonormal basis (ys, yt) (an area light), or, with from_light false, |det(d(s,t)_last /
+// d(s,t)_x0)| when x0 moves in its plane (xs, xt) (a point light): the implicit function
+// theorem on C(x, y) = 0, dx/dy = -(dC/dx)^-1 dC/dy. 0 when singular.
+float manifold_endpoint_jacobian(uint kind, ManifoldChain c, vec3 x0, vec3 y, bool from_light,
+                                 vec3 es, vec3 et) {
+    mat2 A[MANIFOLD_MAX_VERTICES], B[MANIFOLD_MAX_VERTICES], Cn[MANIFOLD_MAX_VERTICES],
+        R[MANIFOLD_MAX_VERTICES], X[MANIFOLD_MAX_VERTICES];
+    for (uint i = 0u; i < MANIFOLD_MAX_VERTICES; ++i) {
+        A[i] = mat2(0.0);
+        B[i] = mat2(1.0);
+        Cn[i] = mat2(0.0);
+        R[i] = mat2(0.0);
+    }
+    for (uint i = 0u; i < c.k; ++i) {
+        vec2 C;
+        bool valid;
+        manifold_row(kind, c, i, x0, y, A[i], B[i], Cn[i], C, valid);
+        if (!valid) return 0.0;
+    }
+    vec3 z = vec3(0.0);
+    if (from_light) {
+        uint i = c.k - 1u;
+        vec3 xp = manifold_chain_prev(c, i, x0);
+        R[i] = -mat2(manifold_constraint_derivative(kind, xp, c.v[i], y, c.frame[i], z, z, z, es),
+                     manifold_constraint_derivative(kind, xp, c.v[i], y, c.frame[i], z, z, z, et));
+    } else {
+        vec3 xn = manifold_chain_next(c, 0u, y);
+        R[0] = -mat2(manifold_constraint_derivative(kind, x0, c.v[0], xn, c.frame[0], es, z, z, z),
+                     manifold_constraint_derivative(kind, x0, c.v[0], xn, c.frame[0], et, z, z, z));
+    }
+    if (!manifold_block_solve(c.k, A, B, Cn, R, X)) return 0.0;
+    return abs(determinant(from_light ? X[0] : X[c.k - 1u]));
+}
+
+// Generalized geometric term of the chain towards an area light (Zeltner Sec. 4.4; Jakob &
+// Marschner 2012 Sec. 4.3): d omega_x0 / dA_y = |cos theta_1| / |x1 - x0|^2 |det(dx1/dy)|, with
+// (ys, yt) an orthonormal basis of the light's plane.
+float manifold_geometric_term_area(uint kind, ManifoldChain c, vec3 x0, vec3 y, vec3 ys, vec3 yt) {
+    vec3 d = c.v[0].p - x0;
+    float r2 = dot(d, d);
+    return abs(dot(c.v[0].ng, d)) / (r2 * sqrt(r2)) *
+           manifold_endpoint_jacobian(kind, c, x0, y, true, ys, yt);
+}
+
+// Towards a point light: d omega_y / dA_x0 = |cos theta_k| / |y - x_k|^2 |det(dx_k/dx0)|, with
+// (xs, xt) an orthonormal basis of x0's plane; the irradiance at x0 is I times this.
+float manifold_geometric_term_point(uint kind, ManifoldChain c, vec3 x0, vec3 y, vec3 xs, vec3 xt) {
+    vec3 d = y - c.v[c.k - 1u].p;
+    float r2 = dot(d, d);
+    return abs(dot(c.v[c.k - 1u].ng, d)) / (r2 * sqrt(r2)) *
+           manifold_endpoint_jacobian(kind, c, x0, y, false, xs, xt);
+}
+
+// Throughput of the chain's specular vertices for radiance flowing y -> x0, as the path
+// tracer's delta BSDF samples weigh it: conductor specular F, dielectric transmittance
+// (1 - F) / eta^2 with eta across the interface from x0's side (bsdf.glsl dielectric_sample).
+// Zero for a one-sided conductor seen from behind.
+vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0) {
+    vec3 T = vec3(1.0);
+    for (uint i = 0u; i < c.k; ++i) {
+        ManifoldVertex v = c.v[i];
+        vec3 wo = normalize(manifold_chain_prev(c, i, x0) - v.p);  // towards the camera side
+        float cos_o = dot(wo, v.n);
+        if (v.reflection) {
+            if (cos_o <= 0.0 && !v.two_sided) return vec3(0.0);
+            T *= v.specular * fresnel_conductor(abs(cos_o), v.cond_eta, v.cond_k);
+        } else {
+            float cos_t;
+            float F = fresnel_dielectric(cos_o, v.eta, cos_t);
+            float e = cos_o >= 0.0 ? v.eta : 1.0 / v.eta;
+            T *= v.specular * ((1.0 - F) / (e * e));
+        }
+    }
+    return T;
+}
+
+#endif
