@@ -6,7 +6,7 @@
 //
 // A covered path, from the camera: a receiver vertex x0 (tagged caustic_receiver, not a
 // caster, with a diffuse or glossy lobe) at the depth SMS runs at, then 1..maxChain specular
-// vertices that the walk models (x1 on a caster, later ones on casters or bouncers; refraction
+// vertices that the walk models (on casters or bouncers, at least one a caster; refraction
 // through smooth dielectrics, reflection off smooth conductors), then an emitter tagged
 // caustic_emitter, reached directly by the last segment.
 #ifndef LOOM_MANIFOLD_COVERAGE_GLSL
@@ -22,10 +22,10 @@ bool manifold_receiver(uint shape_flags, Material m) {
            (bsdf_flags(m) & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
 }
 
-// Whether a surface can hold chain vertex `index` (0 = first after x0).
-bool manifold_chain_surface(uint shape_flags, Material m, uint index) {
-    uint tags = index == 0u ? SHAPE_CAUSTIC_CASTER : SHAPE_CAUSTIC_CASTER | SHAPE_CAUSTIC_BOUNCER;
-    return (shape_flags & tags) != 0u && manifold_material_specular(m);
+// Whether a surface can hold a chain vertex (a caster, or a bouncer: the slab's far face).
+bool manifold_chain_surface(uint shape_flags, Material m) {
+    return (shape_flags & (SHAPE_CAUSTIC_CASTER | SHAPE_CAUSTIC_BOUNCER)) != 0u &&
+           manifold_material_specular(m);
 }
 
 // Whether a sampled delta lobe is the one the walk takes there (refraction through
@@ -43,13 +43,15 @@ bool manifold_emitter_light(uint light) {
 // Tracks, along a camera path, whether the vertices since the receiver form a covered chain.
 struct ManifoldCoverage {
     uint chain_length;  // specular chain vertices since the receiver
-    bool open;    // the path so far is receiver (+ chain): still a covered prefix
+    bool open;          // the path so far is receiver (+ chain): still a covered prefix
+    bool caster;        // the chain has a caster vertex
 };
 
 ManifoldCoverage manifold_coverage_none() {
     ManifoldCoverage c;
     c.chain_length = 0u;
     c.open = false;
+    c.caster = false;
     return c;
 }
 
@@ -63,11 +65,13 @@ ManifoldCoverage manifold_coverage_step(ManifoldCoverage c, ShadingPoint sh, uin
         // leaving it starts no covered path.
         c.open = manifold_receiver(sh.shape_flags, sh.mat) && (sample_flags & BSDF_DELTA) == 0u;
         c.chain_length = 0u;
+        c.caster = false;
         return c;
     }
     if (!c.open) return c;
-    c.open = c.chain_length < max_chain && manifold_chain_surface(sh.shape_flags, sh.mat, c.chain_length) &&
+    c.open = c.chain_length < max_chain && manifold_chain_surface(sh.shape_flags, sh.mat) &&
              manifold_chain_lobe(sh.mat, sample_flags);
+    c.caster = c.caster || (sh.shape_flags & SHAPE_CAUSTIC_CASTER) != 0u;
     c.chain_length += 1u;
     return c;
 }
@@ -75,7 +79,7 @@ ManifoldCoverage manifold_coverage_step(ManifoldCoverage c, ShadingPoint sh, uin
 // Whether the emitter the path reached after c (a triangle of shape flags `emitter_flags`)
 // closes a covered path.
 bool manifold_coverage_covers(ManifoldCoverage c, uint emitter_flags) {
-    return c.open && c.chain_length >= 1u && (emitter_flags & SHAPE_CAUSTIC_EMITTER) != 0u;
+    return c.open && c.caster && (emitter_flags & SHAPE_CAUSTIC_EMITTER) != 0u;
 }
 
 #endif

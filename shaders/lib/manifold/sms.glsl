@@ -104,25 +104,37 @@ struct ManifoldTrial {
     bool straight;           // MNEE seed: the straight line x0 -> y, no scattering
     vec3 x0, ng0;            // the receiver point and its geometric normal
     vec3 y, ny;              // the light point (ny = 0: a point light)
-    vec3 ray_o, ray_d;       // the ray to trace next
-    float ray_tmax;
+    vec3 ray_o, ray_d;       // the ray to trace next, hits with t in (ray_tmin, ray_tmax]
+    float ray_tmin, ray_tmax;
     uint iterations;         // Newton steps taken (halvings included)
     float beta;              // step size
     vec2 step;               // the current Newton step of the first vertex
+    float endpoint_det;      // end-point Jacobian determinant of the chain (walk.glsl)
+    vec3 es, et;             // the plane the end point moves in: the area light's, or x0's
 };
 
 bool manifold_trial_running(ManifoldTrial tr) { return tr.phase < TRIAL_CONVERGED; }
 
-void manifold_trial_ray_towards(inout ManifoldTrial tr, vec3 p, vec3 ng, vec3 target) {
-    vec3 d = normalize(target - p);
-    tr.ray_o = offset_ray_origin(p, ng, d);
+// Rays of a walk start exactly at their vertex and skip its own surface by tmin: an origin
+// offset along the normal would shift every re-traced vertex by up to the offset, more than the
+// solver threshold allows.
+void manifold_trial_ray_from(inout ManifoldTrial tr, vec3 p, vec3 ng, vec3 d) {
+    float eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
+    tr.ray_o = p;
     tr.ray_d = d;
+    tr.ray_tmin = eps / max(abs(dot(d, ng)), 1e-2);
     tr.ray_tmax = 1e30;
+}
+
+void manifold_trial_ray_towards(inout ManifoldTrial tr, vec3 p, vec3 ng, vec3 target) {
+    manifold_trial_ray_from(tr, p, ng, normalize(target - p));
 }
 
 // Starts a trial from x0 towards seed (SMS: a point on a caster, scattered onwards) or along the
 // straight line to y (straight, MNEE).
-ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, bool straight, vec3 seed) {
+// (es, et): orthonormal basis of the light's plane (area lights) or of x0's (point lights).
+ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, vec3 et,
+                                   bool straight, vec3 seed) {
     ManifoldTrial tr;
     tr.phase = TRIAL_SEED;
     tr.straight = straight;
@@ -133,10 +145,13 @@ ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, bool stra
     tr.iterations = 0u;
     tr.beta = 1.0;
     tr.step = vec2(0.0);
+    tr.endpoint_det = 0.0;
+    tr.es = es;
+    tr.et = et;
     tr.chain.k = 0u;
     tr.proposal.k = 0u;
     manifold_trial_ray_towards(tr, x0, ng0, straight ? y : seed);
-    if (straight) tr.ray_tmax = length(y - tr.ray_o) * (1.0 - 1e-4);
+    if (straight) tr.ray_tmax = length(y - x0) * (1.0 - 1e-4);
     return tr;
 }
 
@@ -149,16 +164,11 @@ void manifold_trial_propose(inout ManifoldTrial tr) {
 
 // At an accepted chain: converged (then the shadow ray), or the next Newton step.
 void manifold_trial_evaluate(inout ManifoldTrial tr, ManifoldSettings ms) {
-    float error;
-    if (!manifold_newton_step(ms.constraint, tr.chain, tr.x0, tr.y, tr.step, error)) {
-        // Singular or undefined, unless already on the manifold.
-        if (!(error >= 0.0 && error < ms.solver_threshold)) {
-            tr.phase = TRIAL_FAILED;
-            return;
-        }
-    }
-    if (error < ms.solver_threshold) {
-        if (!manifold_chain_types_valid(tr.chain, tr.x0, tr.y, ms.min_segment)) {
+    ManifoldLinearSolve ls = manifold_linear_solve(ms.constraint, tr.chain, tr.x0, tr.y,
+                                                   dot(tr.ny, tr.ny) > 0.0, tr.es, tr.et);
+    if (ls.error >= 0.0 && ls.error < ms.solver_threshold) {
+        tr.endpoint_det = ls.endpoint_det;
+        if (!ls.ok || !manifold_chain_types_valid(tr.chain, tr.x0, tr.y, ms.min_segment)) {
             tr.phase = TRIAL_FAILED;
             return;
         }
@@ -166,14 +176,16 @@ void manifold_trial_evaluate(inout ManifoldTrial tr, ManifoldSettings ms) {
         ShadowRay r = shadow_ray_between(last.p, last.ng, tr.y, tr.ny);
         tr.ray_o = r.o;
         tr.ray_d = r.d;
+        tr.ray_tmin = 0.0;
         tr.ray_tmax = r.tmax;
         tr.phase = TRIAL_SHADOW;
         return;
     }
-    if (tr.iterations >= ms.max_iterations) {
+    if (!ls.ok || tr.iterations >= ms.max_iterations) {
         tr.phase = TRIAL_FAILED;
         return;
     }
+    tr.step = ls.step;
     manifold_trial_propose(tr);
 }
 
@@ -191,74 +203,72 @@ bool manifold_trial_scatter_on(inout ManifoldTrial tr, ManifoldChain c, uint i) 
     vec3 prev = i == 0u ? tr.x0 : c.v[i - 1u].p;
     SpecularScatter s = manifold_scatter(v, normalize(prev - v.p));
     if (!s.valid) return false;
-    tr.ray_o = offset_ray_origin(v.p, v.ng, s.w);
-    tr.ray_d = s.w;
-    tr.ray_tmax = 1e30;
+    manifold_trial_ray_from(tr, v.p, v.ng, s.w);
     return true;
 }
 
-// The seed chain is complete: start the walk.
-void manifold_trial_begin_walk(inout ManifoldTrial tr, ManifoldSettings ms) {
-    if (tr.proposal.k == 0u) {
+// The seed chain is complete: the walk starts from it (true), or there is none (no vertex, or
+// only bouncers: coverage.glsl's chains have a caster).
+bool manifold_trial_begin_walk(inout ManifoldTrial tr) {
+    bool caster = false;
+    for (uint j = 0u; j < tr.proposal.k; ++j)
+        caster = caster || (scene_shapes[tr.proposal.v[j].shape].flags & SHAPE_CAUSTIC_CASTER) != 0u;
+    if (!caster) {
         tr.phase = TRIAL_FAILED;
-        return;
+        return false;
     }
     tr.chain = tr.proposal;
     manifold_choose_frames(tr.chain, tr.y);
-    manifold_trial_evaluate(tr, ms);
+    return true;
 }
 
-// Feeds the result of tracing the trial's ray (found, hit) back.
+// Feeds the result of tracing the trial's ray (found, hit) back. The walk is evaluated at one
+// place (its linear solve is the largest code of a trial).
 void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, ManifoldSettings ms) {
     if (tr.phase == TRIAL_SHADOW) {
         tr.phase = found ? TRIAL_FAILED : TRIAL_CONVERGED;
         return;
     }
+    bool evaluate = false, append = false;
     uint i = tr.proposal.k;
-    if (tr.phase == TRIAL_SEED) {
-        if (!found) {
-            // The straight line reached y; the scattered seed left the scene.
-            manifold_trial_begin_walk(tr, ms);
-            return;
-        }
-        ShapeGpu shape = scene_shapes[scene_triangles[hit.prim].w];
+    bool seeding = tr.phase == TRIAL_SEED;
+    if (seeding) {
+        ShapeGpu shape = scene_shapes[scene_triangles[found ? hit.prim : 0u].w];
         bool chain_surface =
-            manifold_chain_surface(shape.flags, scene_materials[shape.material], i);
+            found && manifold_chain_surface(shape.flags, scene_materials[shape.material]);
         if (!chain_surface) {
-            // MNEE: a blocker on the line fails; SMS: the scattered chain ends here.
-            if (tr.straight || i == 0u) tr.phase = TRIAL_FAILED;
-            else manifold_trial_begin_walk(tr, ms);
-            return;
-        }
-        if (i >= ms.max_chain) {
+            // The straight line reached y or a blocker (MNEE fails there); the scattered SMS
+            // seed left the casters (its chain ends) or never reached one.
+            if (found && (tr.straight || i == 0u)) tr.phase = TRIAL_FAILED;
+            else evaluate = manifold_trial_begin_walk(tr);
+        } else if (i >= ms.max_chain) {
             tr.phase = TRIAL_FAILED;
-            return;
+        } else {
+            append = true;
         }
+    } else if (!found || scene_triangles[hit.prim].w != tr.chain.v[i].shape) {
+        // TRIAL_RETRACE: vertex i of the proposal must be on the accepted chain's shape i.
+        manifold_trial_reject(tr, ms);
+    } else {
+        append = true;
+    }
+    if (append) {
         tr.proposal.v[i] = manifold_vertex(hit.prim, hit.bary);
         tr.proposal.k = i + 1u;
-        if (tr.straight) {
+        if (!seeding && tr.proposal.k == tr.chain.k) {
+            for (uint j = 0u; j < tr.chain.k; ++j) tr.chain.v[j] = tr.proposal.v[j];
+            tr.beta = min(1.0, 2.0 * tr.beta);
+            evaluate = true;
+        } else if (seeding && tr.straight) {
             ManifoldVertex v = tr.proposal.v[i];
-            tr.ray_o = offset_ray_origin(v.p, v.ng, tr.ray_d);
-            tr.ray_tmax = length(tr.y - tr.ray_o) * (1.0 - 1e-4);
+            manifold_trial_ray_from(tr, v.p, v.ng, tr.ray_d);
+            tr.ray_tmax = length(tr.y - v.p) * (1.0 - 1e-4);
         } else if (!manifold_trial_scatter_on(tr, tr.proposal, i)) {
-            tr.phase = TRIAL_FAILED;
+            if (seeding) tr.phase = TRIAL_FAILED;
+            else manifold_trial_reject(tr, ms);
         }
-        return;
     }
-    // TRIAL_RETRACE: vertex i of the proposal must be on the accepted chain's shape i.
-    if (!found || scene_triangles[hit.prim].w != tr.chain.v[i].shape) {
-        manifold_trial_reject(tr, ms);
-        return;
-    }
-    tr.proposal.v[i] = manifold_vertex(hit.prim, hit.bary);
-    tr.proposal.k = i + 1u;
-    if (tr.proposal.k == tr.chain.k) {
-        for (uint j = 0u; j < tr.chain.k; ++j) tr.chain.v[j] = tr.proposal.v[j];
-        tr.beta = min(1.0, 2.0 * tr.beta);
-        manifold_trial_evaluate(tr, ms);
-        return;
-    }
-    if (!manifold_trial_scatter_on(tr, tr.proposal, i)) manifold_trial_reject(tr, ms);
+    if (evaluate) manifold_trial_evaluate(tr, ms);
 }
 
 // Direction of a solution's first segment, which identifies it (Zeltner Sec. 4.3: two trials
@@ -290,12 +300,11 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
         float dist;
         vec3 Li = point_light_incident(scene_lights[ml.light], last.p, w, dist);
         L = Li * dist * dist / max(abs(wi_local.z), 1e-8);
-        vec3 xs = normalize(sh0.sp.dp_du), xt = cross(sh0.sp.ng, xs);
-        G = manifold_geometric_term_point(ms.constraint, c, tr.x0, tr.y, xs, xt);
+        G = manifold_geometric_term(c, tr.x0, tr.y, false, tr.endpoint_det);
     } else {
         L = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n,
                              normalize(tr.y - last.p));
-        G = manifold_geometric_term_area(ms.constraint, c, tr.x0, tr.y, ml.s, ml.t);
+        G = manifold_geometric_term(c, tr.x0, tr.y, true, tr.endpoint_det);
     }
     if (geometric_clamp > 0.0) G = min(G, geometric_clamp);
     vec3 v = f * T * L * (G / ml.pdf);

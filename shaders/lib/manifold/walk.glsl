@@ -154,30 +154,6 @@ float manifold_chain_error(uint kind, ManifoldChain c, vec3 x0, vec3 y) {
     return e;
 }
 
-// The Jacobian blocks of constraint row i: A = dC_i/d(s,t)_{i-1}, B = dC_i/d(s,t)_i,
-// Cn = dC_i/d(s,t)_{i+1} (columns: motion along s, along t); and the residual C_i.
-void manifold_row(uint kind, ManifoldChain c, uint i, vec3 x0, vec3 y, out mat2 A, out mat2 B,
-                  out mat2 Cn, out vec2 C, out bool valid) {
-    vec3 xp = manifold_chain_prev(c, i, x0), xn = manifold_chain_next(c, i, y);
-    ManifoldVertex v = c.v[i];
-    C = manifold_constraint(kind, xp, v, xn, c.frame[i], valid);
-    vec3 z = vec3(0.0);
-    B = mat2(manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, v.s, v.dn_ds, z),
-             manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, v.t, v.dn_dt, z));
-    A = mat2(0.0);
-    Cn = mat2(0.0);
-    if (i > 0u) {
-        ManifoldVertex u = c.v[i - 1u];
-        A = mat2(manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], u.s, z, z, z),
-                 manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], u.t, z, z, z));
-    }
-    if (i + 1u < c.k) {
-        ManifoldVertex w = c.v[i + 1u];
-        Cn = mat2(manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, z, z, w.s),
-                  manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], z, z, z, w.t));
-    }
-}
-
 // A 2x2 block is singular when |det| is tiny against its scale (relative, so that the test is
 // the same at any scene scale; the reference code's absolute 1e-6 is for unit-size scenes).
 bool manifold_block_singular(mat2 m) {
@@ -186,56 +162,95 @@ bool manifold_block_singular(mat2 m) {
     return !(abs(d) > 1e-7 * scale) || isinf(d) || isnan(d);
 }
 
-// Solves the block-tridiagonal system A_i X_{i-1} + B_i X_i + Cn_i X_{i+1} = R_i for k rows
-// (block Thomas algorithm; each right-hand side is a 2x2 block: two columns at once).
-bool manifold_block_solve(uint k, mat2 A[MANIFOLD_MAX_VERTICES], mat2 B[MANIFOLD_MAX_VERTICES],
-                          mat2 Cn[MANIFOLD_MAX_VERTICES], mat2 R[MANIFOLD_MAX_VERTICES],
-                          out mat2 X[MANIFOLD_MAX_VERTICES]) {
-    mat2 Bp[MANIFOLD_MAX_VERTICES], Rp[MANIFOLD_MAX_VERTICES];
-    for (uint i = 0u; i < MANIFOLD_MAX_VERTICES; ++i) X[i] = mat2(0.0);
+// The linearized chain, solved once per Newton iteration for two things at once:
+//   - the Newton step dX = J^-1 C of the first vertex (the caller re-traces the rest of the
+//     chain from it), and
+//   - the end-point Jacobian by the implicit function theorem on C(x, e) = 0,
+//     dx/de = -J^-1 dC/de: with from_light, |det(d(s,t)_1 / d(s,t)_y)| for the light point y
+//     moving in the plane (es, et) (area lights); else |det(d(s,t)_k / d(s,t)_x0)| for x0
+//     moving in its plane (es, et) (point lights).
+// J is block tridiagonal with 2x2 blocks A_i = dC_i/d(s,t)_{i-1}, B_i = dC_i/d(s,t)_i,
+// Cn_i = dC_i/d(s,t)_{i+1}, solved by the block Thomas algorithm. Row 0's A and row k-1's Cn
+// hold the end points' derivatives (the elimination never reads them).
+struct ManifoldLinearSolve {
+    vec2 step;
+    float error;          // max_i |C_i|; -1 when a constraint is undefined
+    float endpoint_det;   // 0 when J is singular
+    bool ok;              // false: undefined or singular
+};
+
+ManifoldLinearSolve manifold_linear_solve(uint kind, ManifoldChain c, vec3 x0, vec3 y,
+                                          bool from_light, vec3 es, vec3 et) {
+    ManifoldLinearSolve r;
+    r.step = vec2(0.0);
+    r.error = 0.0;
+    r.endpoint_det = 0.0;
+    r.ok = false;
+    mat2 A[MANIFOLD_MAX_VERTICES], B[MANIFOLD_MAX_VERTICES], Cn[MANIFOLD_MAX_VERTICES];
+    vec2 res[MANIFOLD_MAX_VERTICES];
+    vec3 z = vec3(0.0);
+    for (uint i = 0u; i < c.k; ++i) {
+        vec3 xp = manifold_chain_prev(c, i, x0), xn = manifold_chain_next(c, i, y);
+        ManifoldVertex v = c.v[i];
+        bool valid;
+        res[i] = manifold_constraint(kind, xp, v, xn, c.frame[i], valid);
+        if (!valid) {
+            r.error = -1.0;
+            return r;
+        }
+        r.error = max(r.error, length(res[i]));
+        // Six directional derivatives: the previous vertex (or x0), this one, the next (or y),
+        // each along its two parameters; one call site for all.
+        vec2 col[6];
+        for (uint j = 0u; j < 6u; ++j) {
+            bool second = (j & 1u) != 0u;
+            vec3 dxp = z, dx = z, dn = z, dxn = z;
+            if (j < 2u) {
+                if (i > 0u) dxp = second ? c.v[i - 1u].t : c.v[i - 1u].s;
+                else if (!from_light) dxp = second ? et : es;
+            } else if (j < 4u) {
+                dx = second ? v.t : v.s;
+                dn = second ? v.dn_dt : v.dn_ds;
+            } else {
+                if (i + 1u < c.k) dxn = second ? c.v[i + 1u].t : c.v[i + 1u].s;
+                else if (from_light) dxn = second ? et : es;
+            }
+            col[j] = manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], dxp, dx, dn, dxn);
+        }
+        A[i] = mat2(col[0], col[1]);
+        B[i] = mat2(col[2], col[3]);
+        Cn[i] = mat2(col[4], col[5]);
+    }
+    // Right-hand sides: the residual (Newton) and the end point's derivative block.
+    mat2 R[MANIFOLD_MAX_VERTICES];
+    for (uint i = 0u; i < c.k; ++i) R[i] = mat2(0.0);
+    if (from_light) R[c.k - 1u] = -Cn[c.k - 1u];
+    else R[0] = -A[0];
+    // Forward elimination.
+    mat2 Bp[MANIFOLD_MAX_VERTICES];
     Bp[0] = B[0];
-    Rp[0] = R[0];
-    for (uint i = 1u; i < k; ++i) {
-        if (manifold_block_singular(Bp[i - 1u])) return false;
+    for (uint i = 1u; i < c.k; ++i) {
+        if (manifold_block_singular(Bp[i - 1u])) return r;
         mat2 M = A[i] * inverse(Bp[i - 1u]);
         Bp[i] = B[i] - M * Cn[i - 1u];
-        Rp[i] = R[i] - M * Rp[i - 1u];
+        res[i] -= M * res[i - 1u];
+        R[i] -= M * R[i - 1u];
     }
-    if (manifold_block_singular(Bp[k - 1u])) return false;
-    X[k - 1u] = inverse(Bp[k - 1u]) * Rp[k - 1u];
-    for (int i = int(k) - 2; i >= 0; --i) X[i] = inverse(Bp[i]) * (Rp[i] - Cn[i] * X[i + 1]);
-    return true;
-}
-
-// The Newton step of the first vertex: dX = J^-1 C (only the first block is used; the caller
-// re-traces the rest of the chain from the moved first vertex). Returns the residual's norm in
-// `error` (max over rows); false when a constraint is undefined or J is singular.
-bool manifold_newton_step(uint kind, ManifoldChain c, vec3 x0, vec3 y, out vec2 step,
-                          out float error) {
-    mat2 A[MANIFOLD_MAX_VERTICES], B[MANIFOLD_MAX_VERTICES], Cn[MANIFOLD_MAX_VERTICES],
-        R[MANIFOLD_MAX_VERTICES], X[MANIFOLD_MAX_VERTICES];
-    error = 0.0;
-    step = vec2(0.0);
-    for (uint i = 0u; i < MANIFOLD_MAX_VERTICES; ++i) {
-        A[i] = mat2(0.0);
-        B[i] = mat2(1.0);
-        Cn[i] = mat2(0.0);
-        R[i] = mat2(0.0);
+    if (manifold_block_singular(Bp[c.k - 1u])) return r;
+    // Back substitution (X: end-point Jacobian blocks, res: Newton step blocks).
+    mat2 inv = inverse(Bp[c.k - 1u]);
+    vec2 xs = inv * res[c.k - 1u];
+    mat2 X = inv * R[c.k - 1u];
+    float det_last = abs(determinant(X));
+    for (int i = int(c.k) - 2; i >= 0; --i) {
+        mat2 inv_i = inverse(Bp[i]);
+        xs = inv_i * (res[i] - Cn[i] * xs);
+        X = inv_i * (R[i] - Cn[i] * X);
     }
-    for (uint i = 0u; i < c.k; ++i) {
-        vec2 C;
-        bool valid;
-        manifold_row(kind, c, i, x0, y, A[i], B[i], Cn[i], C, valid);
-        if (!valid) {
-            error = -1.0;
-            return false;
-        }
-        error = max(error, length(C));
-        R[i] = mat2(C, vec2(0.0));
-    }
-    if (!manifold_block_solve(c.k, A, B, Cn, R, X)) return false;
-    step = X[0][0];
-    return true;
+    r.step = xs;
+    r.endpoint_det = from_light ? abs(determinant(X)) : det_last;
+    r.ok = true;
+    return r;
 }
 
 // Where the first vertex moves for step size beta: p - beta (s dX0 + t dX1) (Zeltner Sec. 4.3).
@@ -257,58 +272,16 @@ bool manifold_chain_types_valid(ManifoldChain c, vec3 x0, vec3 y, float min_leng
     return true;
 }
 
-// |det(d(s,t)_first / d(s,t)_light)| when the chain's end point y moves in the plane with
-// orthonormal basis (ys, yt) (an area light), or, with from_light false, |det(d(s,t)_last /
-// d(s,t)_x0)| when x0 moves in its plane (xs, xt) (a point light): the implicit function
-// theorem on C(x, y) = 0, dx/dy = -(dC/dx)^-1 dC/dy. 0 when singular.
-float manifold_endpoint_jacobian(uint kind, ManifoldChain c, vec3 x0, vec3 y, bool from_light,
-                                 vec3 es, vec3 et) {
-    mat2 A[MANIFOLD_MAX_VERTICES], B[MANIFOLD_MAX_VERTICES], Cn[MANIFOLD_MAX_VERTICES],
-        R[MANIFOLD_MAX_VERTICES], X[MANIFOLD_MAX_VERTICES];
-    for (uint i = 0u; i < MANIFOLD_MAX_VERTICES; ++i) {
-        A[i] = mat2(0.0);
-        B[i] = mat2(1.0);
-        Cn[i] = mat2(0.0);
-        R[i] = mat2(0.0);
-    }
-    for (uint i = 0u; i < c.k; ++i) {
-        vec2 C;
-        bool valid;
-        manifold_row(kind, c, i, x0, y, A[i], B[i], Cn[i], C, valid);
-        if (!valid) return 0.0;
-    }
-    vec3 z = vec3(0.0);
-    if (from_light) {
-        uint i = c.k - 1u;
-        vec3 xp = manifold_chain_prev(c, i, x0);
-        R[i] = -mat2(manifold_constraint_derivative(kind, xp, c.v[i], y, c.frame[i], z, z, z, es),
-                     manifold_constraint_derivative(kind, xp, c.v[i], y, c.frame[i], z, z, z, et));
-    } else {
-        vec3 xn = manifold_chain_next(c, 0u, y);
-        R[0] = -mat2(manifold_constraint_derivative(kind, x0, c.v[0], xn, c.frame[0], es, z, z, z),
-                     manifold_constraint_derivative(kind, x0, c.v[0], xn, c.frame[0], et, z, z, z));
-    }
-    if (!manifold_block_solve(c.k, A, B, Cn, R, X)) return 0.0;
-    return abs(determinant(from_light ? X[0] : X[c.k - 1u]));
-}
-
-// Generalized geometric term of the chain towards an area light (Zeltner Sec. 4.4; Jakob &
-// Marschner 2012 Sec. 4.3): d omega_x0 / dA_y = |cos theta_1| / |x1 - x0|^2 |det(dx1/dy)|, with
-// (ys, yt) an orthonormal basis of the light's plane.
-float manifold_geometric_term_area(uint kind, ManifoldChain c, vec3 x0, vec3 y, vec3 ys, vec3 yt) {
-    vec3 d = c.v[0].p - x0;
+// Generalized geometric term (Zeltner Sec. 4.4; Jakob & Marschner 2012 Sec. 4.3) from the
+// end-point Jacobian of manifold_linear_solve. Area light (from_light):
+// d omega_x0 / dA_y = |cos theta_1| / |x1 - x0|^2 |det(dx1/dy)|. Point light:
+// d omega_y / dA_x0 = |cos theta_k| / |y - x_k|^2 |det(dx_k/dx0)| (irradiance = I times this).
+float manifold_geometric_term(ManifoldChain c, vec3 x0, vec3 y, bool from_light, float det) {
+    vec3 a = from_light ? x0 : y;
+    ManifoldVertex v = from_light ? c.v[0] : c.v[c.k - 1u];
+    vec3 d = a - v.p;
     float r2 = dot(d, d);
-    return abs(dot(c.v[0].ng, d)) / (r2 * sqrt(r2)) *
-           manifold_endpoint_jacobian(kind, c, x0, y, true, ys, yt);
-}
-
-// Towards a point light: d omega_y / dA_x0 = |cos theta_k| / |y - x_k|^2 |det(dx_k/dx0)|, with
-// (xs, xt) an orthonormal basis of x0's plane; the irradiance at x0 is I times this.
-float manifold_geometric_term_point(uint kind, ManifoldChain c, vec3 x0, vec3 y, vec3 xs, vec3 xt) {
-    vec3 d = y - c.v[c.k - 1u].p;
-    float r2 = dot(d, d);
-    return abs(dot(c.v[c.k - 1u].ng, d)) / (r2 * sqrt(r2)) *
-           manifold_endpoint_jacobian(kind, c, x0, y, false, xs, xt);
+    return abs(dot(v.ng, d)) / (r2 * sqrt(r2)) * det;
 }
 
 // Throughput of the chain's specular vertices for radiance flowing y -> x0, as the path

@@ -1,0 +1,219 @@
+// SpecularManifoldSampling: caustics by specular manifold sampling (Zeltner et al. 2020),
+// unbiased or biased, or MNEE (Hanika et al. 2015), at the primary receivers of a path tracer
+// that leaves out exactly the paths SMS produces. See README.md.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <glm/glm.hpp>
+
+#include "core/gpu/CounterBuffer.h"
+#include "core/graph/KernelParams.h"
+#include "core/graph/RenderGraph.h"
+#include "core/scene/Camera.h"
+#include "core/scene/SceneGpu.h"
+#include "core/util/Log.h"
+
+namespace loom {
+
+namespace {
+
+constexpr uint64_t kPixelBytes = 128;         // SmsPixel (sms_common.glsl)
+constexpr uint64_t kSolutionSetBytes = 512;   // SmsSolutionSet: 32 directions
+constexpr int kMaxBiasedTrials = 32;
+
+enum Counter { kSamples, kSolved, kIterations, kTrials, kBernoulli, kCapped, kMaxSteps, kRays };
+
+}  // namespace
+
+class SpecularManifoldSamplingPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.outputTexture("color", gpu::Format::RGBA32F)
+            .doc("full image: path tracer without the SMS-covered paths + caustic");
+        r.outputTexture("caustic", gpu::Format::RGBA32F)
+            .optional()
+            .doc("the SMS estimate alone (caustics at primary receivers)");
+        r.outputTexture("stats", gpu::Format::RGBA32F)
+            .optional()
+            .doc("per pixel: Newton iterations, solution found, trials, SMS estimate taken");
+        r.scratchTexture("path").doc("the path tracer's part");
+        r.scratchBuffer("pixels").bytesPerPixel(kPixelBytes).doc("estimator state per pixel");
+        r.scratchBuffer("solutions")
+            .bytesPerPixel(kSolutionSetBytes)
+            .doc("biased SMS: unique solutions found per pixel");
+        r.paramEnum("estimator", "unbiased", {"unbiased", "biased", "mnee"})
+            .doc(
+                "unbiased SMS (Bernoulli trials), biased SMS (unique solutions of M trials), or "
+                "MNEE (one walk from the straight line to the light)");
+        r.paramEnum("constraint", "angle_difference", shaderEnum("MANIFOLD_CONSTRAINT"))
+            .doc("specular constraint of the walk (Zeltner et al. Sec. 5.1)");
+        r.param("maxIterations", 20).range(1, 1000).doc("Newton steps per walk (halvings count)");
+        r.param("solverThreshold", 1e-5).min(0).doc("convergence: every |C_i| below this");
+        r.param("uniquenessThreshold", 1e-5)
+            .min(0)
+            .doc("two solutions are one when their first directions d satisfy |d.d' - 1| < this");
+        r.param("maxTrials", 10000000)
+            .min(1)
+            .doc("unbiased: Bernoulli trials before the cap (reference default 1e7)");
+        r.paramEnum("trialCap", "drop", {"drop", "keep"})
+            .doc("at the cap: drop the sample (reference code) or keep it with K = maxTrials");
+        r.param("biasedTrials", 4).range(1, kMaxBiasedTrials).doc("biased: trials M per estimate");
+        r.param("maxChain", 2)
+            .range(1, 4)
+            .doc("specular vertices of a chain (1: single scattering; 2: sphere, slab)");
+        r.param("geometricTermClamp", 0.0)
+            .min(0)
+            .doc("clamp of the generalized geometric term (0 = off; biased)");
+        r.param("maxBounces", 9).range(0, 64).doc("path tracer: scattering events per path");
+        r.param("rrDepth", 5).range(1, 64).doc("path tracer: Russian roulette after this many bounces");
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC")).doc("path tracer: NEE/BSDF MIS");
+        r.param("excludeCovered", true)
+            .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
+        r.param("trialDispatches", 64)
+            .range(1, 100000)
+            .doc("dispatches per frame the walks may span; unfinished estimates count as capped");
+        r.param("stepBudget", 32768)
+            .range(1024, 60000)
+            .doc("BVH steps per invocation and dispatch (lavapipe ends loops at 65535)");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mPath = compileKernel(*this, shaders, "passes/sms/sms_path.comp");
+        mTrials = compileKernel(*this, shaders, "passes/sms/sms_trials.comp");
+    }
+    void execute(ExecuteContext& ctx) override {
+        const auto& scene = ctx.scene();
+        buildCasters(ctx);
+        ShaderDefines defines{{"HAS_STATS", ctx.has("stats") ? "1" : "0"},
+                              {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"}};
+        auto resolve = compileKernel(*this, ctx.shaders(), "passes/sms/sms_resolve.comp", defines);
+        auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
+        float minSegment = 1e-4f * std::max(scene.boundingSphere().w, 1e-6f);
+
+        gpu::Bindings b;
+        scene.bind(b);
+        b.set("ManifoldCasters", mCasters)
+            .set("SmsPixels", ctx.scratchBuffer("pixels"))
+            .set("SmsSolutions", ctx.scratchBuffer("solutions"))
+            .set("SmsCounters", counters)
+            .set("pathImage", ctx.scratchTexture("path"))
+            .set("colorImage", ctx.texture("color"));
+        if (ctx.has("caustic")) b.set("causticImage", ctx.texture("caustic"));
+        if (ctx.has("stats")) b.set("statsImage", ctx.texture("stats"));
+        auto params = [&](gpu::ComputePipeline& p) {
+            KernelParams k(*this, p, ctx);
+            k.set("minSegment", minSegment);
+            return k;
+        };
+        params(*mPath).dispatch(ctx, b, ctx.width(), ctx.height());
+        for (int i = 0; i < param<int>("trialDispatches"); ++i) {
+            ctx.cmd().barrier();
+            params(*mTrials).dispatch(ctx, b, ctx.width(), ctx.height());
+        }
+        ctx.cmd().barrier();
+        params(*resolve).dispatch(ctx, b, ctx.width(), ctx.height());
+    }
+    void frameCompleted(gpu::Context& gpu) override {
+        mCounters.read(gpu);
+        for (int i = 0; i < 8; ++i) mTotals[i] += mCounters[i];
+        if (mCounters[kMaxSteps] >= 65535u - 16u && !mWarnedLoopLimit) {
+            logWarning(
+                "SpecularManifoldSampling: an invocation ran {} BVH steps in one dispatch, at "
+                "lavapipe's loop limit (65535): lower stepBudget",
+                mCounters[kMaxSteps]);
+            mWarnedLoopLimit = true;
+        }
+        if (mCounters[kCapped] > 0 && !mWarnedCap) {
+            logWarning(
+                "SpecularManifoldSampling: {} estimates reached the trial cap this frame "
+                "(maxTrials or trialDispatches; trialCap = {}): the unbiased estimate is biased "
+                "there",
+                mCounters[kCapped], param<std::string>("trialCap"));
+            mWarnedCap = true;
+        }
+    }
+    void onParamChanged(const std::string&) override { std::fill(mTotals, mTotals + 8, 0.0); }
+    // Hong et al. 2025 Table 1 columns, over the frames rendered so far, and this frame's
+    // counters.
+    std::map<std::string, double> stats() const override {
+        auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+        const double* t = mTotals;
+        return {{"samples", t[kSamples]},
+                {"solutions", t[kSolved]},
+                {"successRate", ratio(t[kSolved], t[kSamples])},
+                {"iterationsPerSample", ratio(t[kIterations], t[kSamples])},
+                {"trialsPerSolution", ratio(t[kBernoulli], t[kSolved])},
+                {"iterationsPerSolution", ratio(t[kIterations], t[kSolved])},
+                {"walks", t[kTrials]},
+                {"capped", t[kCapped]},
+                {"rays", t[kRays]},
+                {"maxTraversalSteps", double(mCounters[kMaxSteps])}};
+    }
+
+private:
+    // Seeds: caster triangles (caustic_caster tags) with an inclusive area CDF, in the GPU
+    // triangle order of SceneGpu (shapes in order, each shape's triangles contiguous).
+    void buildCasters(ExecuteContext& ctx) {
+        const scene::Scene& s = ctx.scene().cpu();
+        if (mCasterScene == &s && mCasters) return;
+        std::vector<std::pair<uint32_t, double>> tris;
+        double total = 0.0;
+        uint32_t first = 0;
+        bool receivers = false, emitters = false;
+        for (const auto& shape : s.shapes) {
+            const auto& mesh = s.meshes[shape.mesh];
+            if (shape.flags & scene::kCausticReceiver) receivers = true;
+            if ((shape.flags & scene::kCausticEmitter) && glm::length(shape.emission) > 0) emitters = true;
+            if (shape.flags & (scene::kCausticCasterReflect | scene::kCausticCasterRefract)) {
+                glm::mat4 m = scene::shapeToWorldAt(shape, 0.0f);
+                for (size_t t = 0; t < mesh.indices.size(); ++t) {
+                    glm::uvec3 i = mesh.indices[t];
+                    glm::vec3 a = glm::vec3(m * glm::vec4(mesh.positions[i.x], 1.0f));
+                    glm::vec3 b = glm::vec3(m * glm::vec4(mesh.positions[i.y], 1.0f));
+                    glm::vec3 c = glm::vec3(m * glm::vec4(mesh.positions[i.z], 1.0f));
+                    double area = 0.5 * glm::length(glm::cross(b - a, c - a));
+                    if (area > 0) {
+                        total += area;
+                        tris.push_back({first + uint32_t(t), total});
+                    }
+                }
+            }
+            first += uint32_t(mesh.indices.size());
+        }
+        for (const auto& l : s.lights)
+            if (l.flags & scene::kCausticEmitter) emitters = true;
+        const std::string where = "pass '" + name() + "' (SpecularManifoldSampling), scene '" +
+                                  s.sourceFile + "'";
+        if (tris.empty())
+            throw UserError(where + ": no caustic casters (tag specular shapes caustic_caster)");
+        if (!receivers)
+            throw UserError(where + ": casters but no caustic receivers (tag caustic_receiver)");
+        if (!emitters)
+            throw UserError(where + ": no caustic emitters (tag a light caustic_emitter)");
+        std::vector<glm::uvec2> data;
+        for (auto& [tri, cdf] : tris) {
+            float f = float(cdf / total);
+            uint32_t bits;
+            std::memcpy(&bits, &f, 4);
+            data.push_back({tri, bits});
+        }
+        data.back().y = 0x3f800000u;  // exactly 1
+        mCasters = ctx.gpu().createBuffer(data.size() * sizeof(glm::uvec2), "ManifoldCasters");
+        ctx.gpu().uploadBuffer(*mCasters, data.data(), data.size() * sizeof(glm::uvec2));
+        mCasterScene = &s;
+    }
+
+    std::shared_ptr<gpu::ComputePipeline> mPath, mTrials;
+    std::shared_ptr<gpu::Buffer> mCasters;
+    const scene::Scene* mCasterScene = nullptr;
+    gpu::CounterBuffer<8> mCounters{"SmsCounters"};
+    double mTotals[8] = {};
+    bool mWarnedLoopLimit = false, mWarnedCap = false;
+};
+
+LOOM_REGISTER_PASS(SpecularManifoldSamplingPass, "SpecularManifoldSampling",
+                   "Caustics by specular manifold sampling (unbiased, biased) or MNEE, with a "
+                   "path tracer that leaves out the paths they produce");
+
+}  // namespace loom

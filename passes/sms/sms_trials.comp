@@ -1,0 +1,131 @@
+#version 460
+// SpecularManifoldSampling, stage 2: the walks of each pixel's estimate (Zeltner et al. 2020
+// Sec. 4.3-4.5), continued over dispatches. A dispatch starts trials while the invocation has
+// run fewer than stepBudget BVH steps (lavapipe ends every loop at 65535 iterations per
+// invocation) and keeps the estimate's state in SmsPixels for the next one.
+//   unbiased: the seed's own walk; if it converges, Bernoulli trials with fresh seeds until one
+//             finds the same solution; the estimate is its contribution times the count K,
+//             E[K] = 1 / p (Sec. 4.5). At maxTrials: dropped (reference code) or kept (trialCap).
+//   biased:   M = biasedTrials walks, each unique solution's contribution once (Sec. 4.5).
+//   mnee:     one walk from the straight line to the light (Hanika et al. 2015).
+#include "lib/manifold/sms.glsl"
+#include "lib/rng.glsl"
+#include "passes/sms/sms_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, pc.frameSize))) return;
+    uint index = sms_pixel_index(pixel);
+    SmsPixel st = sms_pixels[index];
+    uint status = st.hit.w;
+    if (status == SMS_NONE || status == SMS_DONE) return;
+
+    Hit h0;
+    h0.prim = st.hit.x;
+    h0.bary = uintBitsToFloat(st.hit.yz);
+    h0.t = 0.0;
+    ShadingPoint sh0 = shading_point(h0);
+    vec3 wo = shading_to_local(sh0, st.wo.xyz);
+    ManifoldLight ml = sms_pixel_light(st);
+    ManifoldSettings ms = sms_settings();
+    Rng rng = rng_from_seed(st.rng);
+    vec3 x0 = sh0.sp.p, ng0 = sh0.sp.ng;
+    // Offsets towards the camera side: the walk leaves x0 on the side it is seen from.
+    if (dot(ng0, st.wo.xyz) < 0.0) ng0 = -ng0;
+    // The plane the chain's fixed end point moves in for the geometric term (walk.glsl).
+    vec3 es = ml.s, et = ml.t;
+    if (ml.point) {
+        es = normalize(sh0.sp.dp_du);
+        et = cross(sh0.sp.ng, es);
+    }
+    uint iterations = 0u, trials = 0u, bernoulli = 0u, capped = 0u, rays = 0u, solutions = 0u;
+
+    ManifoldTrial tr;
+    tr.phase = TRIAL_FAILED;
+    bool pending = false;  // tr holds a finished trial not yet accounted for
+    for (;;) {
+        if (!manifold_trial_running(tr)) {
+            if (pending) {
+                pending = false;
+                iterations += tr.iterations;
+                bool ok = tr.phase == TRIAL_CONVERGED;
+                // One contribution call site (SMS_FIRST, or a unique biased solution).
+                bool wanted = ok && status != SMS_BERNOULLI;
+                vec3 dir = ok ? manifold_trial_direction(tr) : vec3(0.0);
+                uint found = uint(st.value.w);
+                if (wanted && status == SMS_BIASED)
+                    for (uint j = 0u; j < found; ++j)
+                        wanted = wanted && !manifold_same_solution(dir, sms_solutions[index].dirs[j].xyz,
+                                                                   pc.uniquenessThreshold);
+                vec3 value = wanted ? manifold_trial_contribution(tr, ms, sh0, wo, ml,
+                                                                  pc.geometricTermClamp)
+                                    : vec3(0.0);
+                if (status == SMS_FIRST) {
+                    if (!ok) {
+                        status = SMS_DONE;
+                    } else {
+                        st.value.rgb = value;
+                        st.target = vec4(dir, 1.0);
+                        st.counts.z = 1u;
+                        solutions += 1u;
+                        status = pc.estimator == ESTIMATOR_UNBIASED ? SMS_BERNOULLI : SMS_DONE;
+                        if (!any(greaterThan(st.value.rgb, vec3(0.0)))) status = SMS_DONE;
+                    }
+                } else if (status == SMS_BERNOULLI) {
+                    bernoulli += 1u;
+                    if (ok && manifold_same_solution(dir, st.target.xyz, pc.uniquenessThreshold)) {
+                        st.value.rgb *= st.target.w;
+                        status = SMS_DONE;
+                    } else {
+                        st.target.w += 1.0;
+                        if (st.target.w >= float(pc.maxTrials)) {
+                            capped += 1u;
+                            st.counts.w = 1u;
+                            if (pc.trialCap == TRIAL_CAP_DROP) st.value.rgb = vec3(0.0);
+                            else st.value.rgb *= st.target.w;
+                            status = SMS_DONE;
+                        }
+                    }
+                } else {  // SMS_BIASED
+                    st.target.w += 1.0;
+                    if (wanted) {  // a solution not found before
+                        sms_solutions[index].dirs[found] = vec4(dir, 0.0);
+                        st.value.rgb += value;
+                        st.value.w += 1.0;
+                        if (found == 0u) {
+                            st.counts.z = 1u;
+                            solutions += 1u;
+                        }
+                    }
+                    if (st.target.w >= float(pc.biasedTrials)) status = SMS_DONE;
+                }
+            }
+            if (status == SMS_DONE || bvh_iterations >= pc.stepBudget) break;
+            // The next trial: a fresh seed on the casters, or MNEE's straight line.
+            vec3 u = vec3(rng_next2(rng), rng_next(rng));
+            bool straight = pc.estimator == ESTIMATOR_MNEE;
+            tr = manifold_trial_start(x0, ng0, ml.y, ml.n, es, et, straight,
+                                      straight ? ml.y : manifold_sample_caster(u));
+            trials += 1u;
+            pending = true;
+        }
+        Hit hit;
+        bool found = trace_closest(tr.ray_o, tr.ray_d, tr.ray_tmin, tr.ray_tmax, BVH_MASK_ALL, hit);
+        rays += 1u;
+        manifold_trial_advance(tr, found, hit, ms);
+    }
+    st.hit.w = status;
+    st.rng = rng.state;
+    st.counts.x += iterations;
+    st.counts.y += trials;
+    sms_pixels[index] = st;
+    atomicAdd(sms_iterations, iterations);
+    atomicAdd(sms_trials, trials);
+    atomicAdd(sms_bernoulli, bernoulli);
+    atomicAdd(sms_capped, capped);
+    atomicAdd(sms_solved, solutions);
+    atomicAdd(sms_rays, rays);
+    atomicMax(sms_max_bvh_iterations, bvh_iterations);
+}
