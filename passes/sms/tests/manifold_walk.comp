@@ -4,7 +4,8 @@
 // geometric normal, 2 y (light point), 3 ny (area light normal, 0: point light), 4 seed point
 // (w = 1: straight line to y, MNEE), 5 (constraint, max iterations, threshold, max chain),
 // 6/7 es/et (the end point's plane). Output rows: 0 (phase, iterations, k, endpoint det),
-// 1..4 chain vertices (w = shape), 5 (beta, error of the final chain, 0, 0).
+// 1..4 chain vertices (w = triangle), 5 (beta, error of the final chain, 0, 0), 6 the first
+// vertex's geometric normal.
 #include "lib/bvh.glsl"
 #include "lib/manifold/sms.glsl"
 
@@ -37,7 +38,8 @@ void main() {
                                             float(tr.chain.k), tr.endpoint_det));
     for (uint i = 0u; i < 4u; ++i)
         imageStore(outputImage, ivec2(x, 1 + int(i)),
-                   i < tr.chain.k ? vec4(tr.chain.v[i].p, float(tr.chain.v[i].shape)) : vec4(0.0));
+                   i < tr.chain.k ? vec4(tr.chain.v[i].p, float(tr.chain.v[i].prim)) : vec4(0.0));
     float e = tr.chain.k > 0u ? manifold_chain_error(ms.constraint, tr.chain, tr.x0, tr.y) : -1.0;
     imageStore(outputImage, ivec2(x, 5), vec4(tr.beta, e, 0.0, 0.0));
+    imageStore(outputImage, ivec2(x, 6), tr.chain.k > 0u ? vec4(tr.chain.v[0].ng, 0.0) : vec4(0.0));
 }

@@ -15,6 +15,7 @@
 #include "core/image/Image.h"
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
+#include "tests/support/RegionStats.h"
 #include "tests/support/TestSupport.h"
 
 namespace loom {
@@ -55,6 +56,8 @@ struct WalkResult {
     int phase, iterations, k;
     float det, beta, error;
     glm::vec3 v[4];
+    float prim[4];
+    glm::vec3 ng1;
 };
 constexpr int kConverged = 3;
 
@@ -104,7 +107,11 @@ std::vector<WalkResult> runWalks(const scene::Scene& scene, const std::vector<Wa
     for (uint32_t i = 0; i < n; ++i) {
         glm::vec4 a = get(i, 0), b = get(i, 5);
         res[i] = {int(a.x), int(a.y), int(a.z), a.w, b.x, b.y, {}};
-        for (int j = 0; j < 4; ++j) res[i].v[j] = glm::vec3(get(i, 1 + j));
+        for (int j = 0; j < 4; ++j) {
+            res[i].v[j] = glm::vec3(get(i, 1 + j));
+            res[i].prim[j] = get(i, 1 + j).w;
+        }
+        res[i].ng1 = glm::vec3(get(i, 6));
     }
     return res;
 }
@@ -145,6 +152,249 @@ TEST(SpecularManifoldWalk, FlatMirrorConvergesToTheImageSourcePoint) {
         EXPECT_LT(res[i].error, 1e-5f);
     }
     EXPECT_GT(converged, 40);
+}
+
+// The generalized geometric term's end-point Jacobian |det(dx1/dy)| of two-refraction chains
+// through the glass sphere against central differences: move the light point along its plane,
+// re-solve from the old solution, measure x1's motion in its tangent plane.
+TEST(SpecularManifoldWalk, EndpointJacobianMatchesFiniteDifferencesThroughTheSphere) {
+    auto scene = scene::loadScene(sourcePath("scenes/glass_sphere.json"));
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1, 1);
+    const glm::vec3 lightCentre(0.6f, 3.0f, -0.3f), es(1, 0, 0), et(0, 0, 1);
+    const float h = 4e-3f;
+    auto base = [&](glm::vec3 x0, glm::vec3 y, glm::vec3 seed, int constraint) {
+        WalkInput w;
+        w.x0 = x0;
+        w.ng0 = glm::vec3(0, 1, 0);
+        w.y = y;
+        w.ny = glm::vec3(0, -1, 0);
+        w.seed = seed;
+        w.constraint = constraint;
+        w.threshold = 2e-7f;  // near float precision, so that solutions move by h J, not noise
+        w.maxIterations = 40;
+        w.es = es;
+        w.et = et;
+        return w;
+    };
+    // Base solves from random seeds on the sphere's upper half, towards the light.
+    std::vector<WalkInput> in;
+    for (int i = 0; i < 256; ++i) {
+        glm::vec3 x0(-0.6f + 0.35f * u(rng), 0.0f, 0.3f + 0.35f * u(rng));
+        glm::vec3 y = lightCentre + 0.1f * u(rng) * es + 0.1f * u(rng) * et;
+        glm::vec3 d = glm::normalize(glm::vec3(u(rng), 1.0f + u(rng), u(rng)));
+        in.push_back(base(x0, y, glm::vec3(0, 0.6f, 0) + 0.5f * d, i % 2));
+    }
+    auto first = runWalks(scene, in);
+    std::vector<WalkInput> fd;
+    std::vector<size_t> which;
+    for (size_t i = 0; i < in.size() && which.size() < 48; ++i) {
+        if (first[i].phase != kConverged || first[i].k != 2) continue;
+        which.push_back(i);
+        for (glm::vec3 dy : {h * es, -h * es, h * et, -h * et})
+            fd.push_back(base(in[i].x0, in[i].y + dy, first[i].v[0], in[i].constraint));
+    }
+    ASSERT_GE(which.size(), 12u) << "too few two-refraction solutions to check";
+    auto moved = runWalks(scene, fd);
+    int checked = 0;
+    double worst = 0;
+    for (size_t j = 0; j < which.size(); ++j) {
+        const auto* m = &moved[j * 4];
+        if (m[0].phase != kConverged || m[1].phase != kConverged || m[2].phase != kConverged ||
+            m[3].phase != kConverged)
+            continue;
+        const WalkResult& b = first[which[j]];
+        // Interpolated normals are smooth within a triangle only: differences across an edge
+        // measure the mesh's kinks, not the derivative.
+        bool sameTriangles = true;
+        for (int q = 0; q < 4; ++q)
+            sameTriangles = sameTriangles && m[q].prim[0] == b.prim[0] && m[q].prim[1] == b.prim[1];
+        if (!sameTriangles) continue;
+        glm::vec3 n = glm::normalize(b.ng1);
+        glm::vec3 s = glm::normalize(glm::cross(n, glm::vec3(0.3f, 0.5f, 0.7f))), t = glm::cross(n, s);
+        auto st = [&](glm::vec3 p) { return glm::vec2(glm::dot(p, s), glm::dot(p, t)); };
+        glm::vec2 c0 = (st(m[0].v[0]) - st(m[1].v[0])) / (2 * h);
+        glm::vec2 c1 = (st(m[2].v[0]) - st(m[3].v[0])) / (2 * h);
+        double detFd = std::abs(double(c0.x) * c1.y - double(c0.y) * c1.x);
+        double rel = std::abs(b.det - detFd) / detFd;
+        worst = std::max(worst, rel);
+        ++checked;
+        EXPECT_LT(rel, 0.005) << "chain " << j << ": det " << b.det << " finite differences " << detFd;
+    }
+    EXPECT_GE(checked, 10);
+    std::printf("end-point Jacobian vs finite differences: %d chains, worst relative error %.4f\n",
+                checked, worst);
+}
+
+// Two flat mirrors facing down at y = 2 over a diffuse floor (albedo 0.5), a point light of
+// intensity 1 at (0, 1, 0): mirror A (area 1) above the origin holds every reflection point the
+// camera's floor region has; mirror B (area 3) far to the side holds none, so a seed converges
+// with probability p = 1/4 exactly (seeds are uniform by area; a walk never leaves its shape).
+const char* kTwoMirrorScene = R"({
+  "loom_scene": 1,
+  "camera": {"origin": [0, 1.5, 2.5], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 30},
+  "materials": {"mirror": {"type": "conductor", "metal": "none"},
+                "floor": {"type": "diffuse", "reflectance": 0.5}},
+  "shapes": [
+    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
+     "transform": [{"scale": 6}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
+    {"name": "mirrorA", "type": "rectangle", "material": "mirror", "caustic_caster": true,
+     "transform": [{"scale": 0.5}, {"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 2, 0]}]},
+    {"name": "mirrorB", "type": "rectangle", "material": "mirror", "caustic_caster": true,
+     "transform": [{"scale": [0.5, 1.5, 1]}, {"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [3.5, 2, 0]}]}],
+  "lights": [{"type": "point", "position": [0, 1, 0], "intensity": 1, "caustic_emitter": true}]
+})";
+
+// The mirror caustic in closed form at floor point x: the image source y' = (0, 3, 0) seen
+// through mirror A, L = rho / pi * I cos / d^2.
+double twoMirrorCaustic(glm::dvec3 x) {
+    glm::dvec3 img(0, 3, 0);
+    glm::dvec3 r = x + (2.0 / 3.0) * (img - x);  // reflection point on y = 2
+    if (std::abs(r.x) > 0.5 || std::abs(r.z) > 0.5) return 0.0;
+    glm::dvec3 d = img - x;
+    double d2 = glm::dot(d, d);
+    return 0.5 / M_PI * (d.y / std::sqrt(d2)) / d2;
+}
+
+struct CausticRun {
+    test::RegionStats caustic{1};
+    double analytic = 0;       // the closed form over the same pixels
+    double meanK = 0, seK = 0;  // Bernoulli trials of the estimates that found the solution
+    int solved = 0;
+};
+
+// SMS on the two-mirror scene, pixel centres (GBuffer positions give the closed form there).
+CausticRun runTwoMirror(const json& smsParams, int frames) {
+    test::TempDir dir("loom-sms");
+    auto scene = sceneFromJson(kTwoMirrorScene, dir);
+    json g = {{"passes",
+               {{{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", smsParams}},
+                {{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
+              {"edges", json::array()},
+              {"outputs", {"sms.caustic", "sms.stats", "gbuf.position"}}};
+    constexpr uint32_t kSize = 16;
+    Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), "<test>"), kSize, kSize, 1);
+    r.setScene(scene);
+    CausticRun run;
+    double sumK = 0, sumK2 = 0;
+    for (int f = 0; f < frames; ++f) {
+        r.frame();
+        ImageData c = r.readOutput("sms.caustic"), st = r.readOutput("sms.stats");
+        if (f == 0) {
+            ImageData pos = r.readOutput("gbuf.position");
+            for (uint32_t y = 0; y < kSize; ++y)
+                for (uint32_t x = 0; x < kSize; ++x)
+                    run.analytic += twoMirrorCaustic(
+                                        glm::dvec3(pos.at(x, y, 0), pos.at(x, y, 1), pos.at(x, y, 2))) /
+                                    double(kSize * kSize);
+        }
+        run.caustic.add(c);
+        for (uint32_t y = 0; y < kSize; ++y)
+            for (uint32_t x = 0; x < kSize; ++x)
+                if (st.at(x, y, 1) > 0.5f) {  // solution found: walks = 1 + K
+                    double K = st.at(x, y, 2) - 1.0;
+                    sumK += K;
+                    sumK2 += K * K;
+                    ++run.solved;
+                }
+    }
+    run.meanK = sumK / run.solved;
+    run.seK = std::sqrt(std::max(sumK2 / run.solved - run.meanK * run.meanK, 0.0) / run.solved);
+    return run;
+}
+
+TEST(SpecularManifoldSampling, BernoulliTrialsAverageOneOverTheConvergenceProbability) {
+    auto run = runTwoMirror({{"estimator", "unbiased"}}, 32);
+    ASSERT_GT(run.solved, 1000);
+    // E[K] = 1 / p = 4, K geometric: SE from the measured spread.
+    EXPECT_LT(std::abs(run.meanK - 4.0), 3.0 * run.seK)
+        << "mean K " << run.meanK << " +- " << run.seK << " over " << run.solved;
+    // The estimate f K against the closed form (pixels with no solution read 0 in both).
+    double se = std::sqrt(run.caustic.stderr2(0));
+    EXPECT_LT(std::abs(run.caustic.mean(0) - run.analytic), 3.0 * se + 2e-3 * run.analytic)
+        << "sms " << run.caustic.mean(0) << " +- " << se << " closed form " << run.analytic;
+    std::printf("two mirrors: E[K] = %.4f +- %.4f (1/p = 4), caustic %.6f +- %.6f vs %.6f\n",
+                run.meanK, run.seK, run.caustic.mean(0), se, run.analytic);
+}
+
+// The trial cap's two behaviours, in closed form at p = 1/4 and maxTrials = 2. An estimate
+// exists when the sample's own walk converges (probability p) and is f K, E = f. Drop keeps it
+// only when the first Bernoulli trial succeeds: E = p * p f = f / 16. Keep uses min(K, 2):
+// E = p f (p + 2 (1 - p)) = 0.4375 f.
+TEST(SpecularManifoldSampling, TrialCapDropsOrKeepsAsDeclared) {
+    auto drop = runTwoMirror({{"estimator", "unbiased"}, {"maxTrials", 2}, {"trialCap", "drop"}}, 8);
+    auto keep = runTwoMirror({{"estimator", "unbiased"}, {"maxTrials", 2}, {"trialCap", "keep"}}, 8);
+    double seDrop = std::sqrt(drop.caustic.stderr2(0)), seKeep = std::sqrt(keep.caustic.stderr2(0));
+    EXPECT_LT(std::abs(drop.caustic.mean(0) - drop.analytic / 16.0), 3.0 * seDrop + 2e-3 * drop.analytic)
+        << "drop: " << drop.caustic.mean(0) << " +- " << seDrop << ", expected " << drop.analytic / 16.0;
+    EXPECT_LT(std::abs(keep.caustic.mean(0) - 0.4375 * keep.analytic), 3.0 * seKeep + 2e-3 * keep.analytic)
+        << "keep: " << keep.caustic.mean(0) << " +- " << seKeep << ", expected " << 0.4375 * keep.analytic;
+}
+
+// Frames of `port` from a graph on a scene: each frame is an independent estimate (new
+// frame index, no history), so their spread gives the standard errors.
+test::RegionStats frameStats(std::unique_ptr<RenderGraph> graph, const scene::Scene& scene,
+                             const std::string& port, int frames, int regions, uint32_t size,
+                             uint32_t seed) {
+    Renderer r(test::gpuContext(), std::move(graph), size, size, 1);
+    r.setScene(scene);
+    r.setSeed(seed);
+    test::RegionStats stats(regions);
+    for (int f = 0; f < frames; ++f) {
+        r.frame();
+        ImageData img = r.readOutput(port);
+        for (uint32_t i = 0; i < img.width * img.height; ++i) {
+            float* p = &img.pixels[i * img.channels];
+            float y = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
+            p[0] = p[1] = p[2] = y;
+        }
+        stats.add(img);
+    }
+    return stats;
+}
+
+std::unique_ptr<RenderGraph> smsGraph(const std::string& file, const json& overrides = {}) {
+    auto g = RenderGraph::load(sourcePath("graphs/" + file));
+    for (auto& [key, value] : overrides.items()) g->setParam(key, value);
+    return g;
+}
+
+std::unique_ptr<RenderGraph> ptGraph(int spp) {
+    json g = {{"name", "pt_reference"},
+              {"passes",
+               {{{"name", "pt"},
+                 {"type", "PathTracer"},
+                 {"params", {{"samplesPerPixel", spp}, {"maxBounces", 9}, {"motionBlur", false}}}}}},
+              {"edges", json::array()},
+              {"outputs", {"pt.color"}}};
+    return RenderGraph::parse(g.dump(), "<test>");
+}
+
+struct UnbiasedCheck {
+    double z;        // worst |z| over the regions
+    double sms, pt;  // the means there
+};
+
+// SMS (full image: the path part without covered paths + the caustic) against the reference
+// path tracer, luminance over regions x regions blocks.
+UnbiasedCheck compareWithPathTracer(const scene::Scene& scene, const json& overrides,
+                                    int smsFrames, int ptFrames, int ptSpp, int regions) {
+    constexpr uint32_t kSize = 32;
+    auto sms = frameStats(smsGraph("sms.json", overrides), scene, "sms.color", smsFrames, regions,
+                          kSize, 11);
+    auto pt = frameStats(ptGraph(ptSpp), scene, "pt.color", ptFrames, regions, kSize, 23);
+    UnbiasedCheck c;
+    c.z = test::maxZ(sms, pt, &c.sms, &c.pt);
+    for (int i = 0; i < regions * regions; ++i)
+        std::printf("region %d: sms %.5f +- %.5f  pt %.5f +- %.5f\n", i, sms.mean(i * 3),
+                    std::sqrt(sms.stderr2(i * 3)), pt.mean(i * 3), std::sqrt(pt.stderr2(i * 3)));
+    return c;
+}
+
+TEST(SpecularManifoldSampling, UnbiasedOnTheGlassSphereAgainstThePathTracer) {
+    auto scene = scene::loadScene(sourcePath("scenes/glass_sphere.json"));
+    auto c = compareWithPathTracer(scene, {}, 256, 64, 32, 2);
+    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
 }
 
 }  // namespace
