@@ -19,8 +19,8 @@ namespace loom {
 
 namespace {
 
-constexpr uint64_t kPixelBytes = 128;         // SmsPixel (sms_common.glsl)
-constexpr uint64_t kSolutionSetBytes = 512;   // SmsSolutionSet: 32 directions
+constexpr uint64_t kPixelBytes = 128;        // SmsPixel (sms_common.glsl)
+constexpr uint64_t kSolutionSetBytes = 512;  // SmsSolutionSet: 32 directions
 constexpr int kMaxBiasedTrials = 32;
 
 enum Counter { kSamples, kSolved, kIterations, kTrials, kBernoulli, kCapped, kMaxSteps, kRays };
@@ -67,8 +67,11 @@ public:
             .min(0)
             .doc("clamp of the generalized geometric term (0 = off; biased)");
         r.param("maxBounces", 9).range(0, 64).doc("path tracer: scattering events per path");
-        r.param("rrDepth", 5).range(1, 64).doc("path tracer: Russian roulette after this many bounces");
-        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC")).doc("path tracer: NEE/BSDF MIS");
+        r.param("rrDepth", 5)
+            .range(1, 64)
+            .doc("path tracer: Russian roulette after this many bounces");
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
+            .doc("path tracer: NEE/BSDF MIS");
         r.param("excludeCovered", true)
             .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
         r.param("trialDispatches", 64)
@@ -164,7 +167,8 @@ private:
         for (const auto& shape : s.shapes) {
             const auto& mesh = s.meshes[shape.mesh];
             if (shape.flags & scene::kCausticReceiver) receivers = true;
-            if ((shape.flags & scene::kCausticEmitter) && glm::length(shape.emission) > 0) emitters = true;
+            if ((shape.flags & scene::kCausticEmitter) && glm::length(shape.emission) > 0)
+                emitters = true;
             if (shape.flags & (scene::kCausticCasterReflect | scene::kCausticCasterRefract)) {
                 glm::mat4 m = scene::shapeToWorldAt(shape, 0.0f);
                 for (size_t t = 0; t < mesh.indices.size(); ++t) {
@@ -183,8 +187,7 @@ private:
         }
         for (const auto& l : s.lights)
             if (l.flags & scene::kCausticEmitter) emitters = true;
-        const std::string where = "pass '" + name() + "' (SpecularManifoldSampling), scene '" +
-                                  s.sourceFile + "'";
+        const std::string where = "scene '" + s.sourceFile + "'";  // the graph adds the pass
         if (tris.empty())
             throw UserError(where + ": no caustic casters (tag specular shapes caustic_caster)");
         if (!receivers)

@@ -21,7 +21,9 @@
 namespace loom {
 namespace {
 
-std::string sourcePath(const std::string& rel) { return std::string(LOOM_SOURCE_DIR) + "/" + rel; }
+std::string sourcePath(const std::string& rel) {
+    return std::string(LOOM_SOURCE_DIR) + "/" + rel;
+}
 
 scene::Scene sceneFromJson(const std::string& text, const test::TempDir& dir,
                            const std::string& name = "scene.json") {
@@ -211,7 +213,8 @@ TEST(SpecularManifoldWalk, EndpointJacobianMatchesFiniteDifferencesThroughTheSph
             sameTriangles = sameTriangles && m[q].prim[0] == b.prim[0] && m[q].prim[1] == b.prim[1];
         if (!sameTriangles) continue;
         glm::vec3 n = glm::normalize(b.ng1);
-        glm::vec3 s = glm::normalize(glm::cross(n, glm::vec3(0.3f, 0.5f, 0.7f))), t = glm::cross(n, s);
+        glm::vec3 s = glm::normalize(glm::cross(n, glm::vec3(0.3f, 0.5f, 0.7f))),
+                  t = glm::cross(n, s);
         auto st = [&](glm::vec3 p) { return glm::vec2(glm::dot(p, s), glm::dot(p, t)); };
         glm::vec2 c0 = (st(m[0].v[0]) - st(m[1].v[0])) / (2 * h);
         glm::vec2 c1 = (st(m[2].v[0]) - st(m[3].v[0])) / (2 * h);
@@ -219,7 +222,8 @@ TEST(SpecularManifoldWalk, EndpointJacobianMatchesFiniteDifferencesThroughTheSph
         double rel = std::abs(b.det - detFd) / detFd;
         worst = std::max(worst, rel);
         ++checked;
-        EXPECT_LT(rel, 0.005) << "chain " << j << ": det " << b.det << " finite differences " << detFd;
+        EXPECT_LT(rel, 0.005) << "chain " << j << ": det " << b.det << " finite differences "
+                              << detFd;
     }
     EXPECT_GE(checked, 10);
     std::printf("end-point Jacobian vs finite differences: %d chains, worst relative error %.4f\n",
@@ -258,7 +262,7 @@ double twoMirrorCaustic(glm::dvec3 x) {
 
 struct CausticRun {
     test::RegionStats caustic{1};
-    double analytic = 0;       // the closed form over the same pixels
+    double analytic = 0;        // the closed form over the same pixels
     double meanK = 0, seK = 0;  // Bernoulli trials of the estimates that found the solution
     int solved = 0;
 };
@@ -284,8 +288,8 @@ CausticRun runTwoMirror(const json& smsParams, int frames) {
             ImageData pos = r.readOutput("gbuf.position");
             for (uint32_t y = 0; y < kSize; ++y)
                 for (uint32_t x = 0; x < kSize; ++x)
-                    run.analytic += twoMirrorCaustic(
-                                        glm::dvec3(pos.at(x, y, 0), pos.at(x, y, 1), pos.at(x, y, 2))) /
+                    run.analytic += twoMirrorCaustic(glm::dvec3(pos.at(x, y, 0), pos.at(x, y, 1),
+                                                                pos.at(x, y, 2))) /
                                     double(kSize * kSize);
         }
         run.caustic.add(c);
@@ -322,13 +326,19 @@ TEST(SpecularManifoldSampling, BernoulliTrialsAverageOneOverTheConvergenceProbab
 // only when the first Bernoulli trial succeeds: E = p * p f = f / 16. Keep uses min(K, 2):
 // E = p f (p + 2 (1 - p)) = 0.4375 f.
 TEST(SpecularManifoldSampling, TrialCapDropsOrKeepsAsDeclared) {
-    auto drop = runTwoMirror({{"estimator", "unbiased"}, {"maxTrials", 2}, {"trialCap", "drop"}}, 8);
-    auto keep = runTwoMirror({{"estimator", "unbiased"}, {"maxTrials", 2}, {"trialCap", "keep"}}, 8);
+    auto drop =
+        runTwoMirror({{"estimator", "unbiased"}, {"maxTrials", 2}, {"trialCap", "drop"}}, 8);
+    auto keep =
+        runTwoMirror({{"estimator", "unbiased"}, {"maxTrials", 2}, {"trialCap", "keep"}}, 8);
     double seDrop = std::sqrt(drop.caustic.stderr2(0)), seKeep = std::sqrt(keep.caustic.stderr2(0));
-    EXPECT_LT(std::abs(drop.caustic.mean(0) - drop.analytic / 16.0), 3.0 * seDrop + 2e-3 * drop.analytic)
-        << "drop: " << drop.caustic.mean(0) << " +- " << seDrop << ", expected " << drop.analytic / 16.0;
-    EXPECT_LT(std::abs(keep.caustic.mean(0) - 0.4375 * keep.analytic), 3.0 * seKeep + 2e-3 * keep.analytic)
-        << "keep: " << keep.caustic.mean(0) << " +- " << seKeep << ", expected " << 0.4375 * keep.analytic;
+    EXPECT_LT(std::abs(drop.caustic.mean(0) - drop.analytic / 16.0),
+              3.0 * seDrop + 2e-3 * drop.analytic)
+        << "drop: " << drop.caustic.mean(0) << " +- " << seDrop << ", expected "
+        << drop.analytic / 16.0;
+    EXPECT_LT(std::abs(keep.caustic.mean(0) - 0.4375 * keep.analytic),
+              3.0 * seKeep + 2e-3 * keep.analytic)
+        << "keep: " << keep.caustic.mean(0) << " +- " << seKeep << ", expected "
+        << 0.4375 * keep.analytic;
 }
 
 // Frames of `port` from a graph on a scene: each frame is an independent estimate (new
@@ -360,13 +370,14 @@ std::unique_ptr<RenderGraph> smsGraph(const std::string& file, const json& overr
 }
 
 std::unique_ptr<RenderGraph> ptGraph(int spp) {
-    json g = {{"name", "pt_reference"},
-              {"passes",
-               {{{"name", "pt"},
-                 {"type", "PathTracer"},
-                 {"params", {{"samplesPerPixel", spp}, {"maxBounces", 9}, {"motionBlur", false}}}}}},
-              {"edges", json::array()},
-              {"outputs", {"pt.color"}}};
+    json g = {
+        {"name", "pt_reference"},
+        {"passes",
+         {{{"name", "pt"},
+           {"type", "PathTracer"},
+           {"params", {{"samplesPerPixel", spp}, {"maxBounces", 9}, {"motionBlur", false}}}}}},
+        {"edges", json::array()},
+        {"outputs", {"pt.color"}}};
     return RenderGraph::parse(g.dump(), "<test>");
 }
 
@@ -377,8 +388,8 @@ struct UnbiasedCheck {
 
 // SMS (full image: the path part without covered paths + the caustic) against the reference
 // path tracer, luminance over regions x regions blocks.
-UnbiasedCheck compareWithPathTracer(const scene::Scene& scene, const json& overrides,
-                                    int smsFrames, int ptFrames, int ptSpp, int regions) {
+UnbiasedCheck compareWithPathTracer(const scene::Scene& scene, const json& overrides, int smsFrames,
+                                    int ptFrames, int ptSpp, int regions) {
     constexpr uint32_t kSize = 32;
     auto sms = frameStats(smsGraph("sms.json", overrides), scene, "sms.color", smsFrames, regions,
                           kSize, 11);
@@ -395,6 +406,51 @@ TEST(SpecularManifoldSampling, UnbiasedOnTheGlassSphereAgainstThePathTracer) {
     auto scene = scene::loadScene(sourcePath("scenes/glass_sphere.json"));
     auto c = compareWithPathTracer(scene, {}, 256, 64, 32, 2);
     EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+}
+
+TEST(SpecularManifoldSampling, UnbiasedOnTheCurvedMirrorAgainstThePathTracer) {
+    auto scene = scene::loadScene(sourcePath("scenes/curved_mirror.json"));
+    auto c = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
+    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+}
+
+// The bias class the exclusion prevents: with the covered paths left in the path part, the
+// image brightens by the caustic, and the same comparison must see it.
+TEST(SpecularManifoldSampling, DoubleCountingIsDetected) {
+    auto scene = scene::loadScene(sourcePath("scenes/curved_mirror.json"));
+    auto c = compareWithPathTracer(scene, {{"sms.excludeCovered", false}}, 128, 64, 32, 2);
+    EXPECT_GT(c.z, 6.0) << "double counting went unseen: sms " << c.sms << " pt " << c.pt;
+    EXPECT_GT(c.sms, c.pt);
+    std::printf("double counting: worst |z| %.1f (sms %.5f, pt %.5f)\n", c.z, c.sms, c.pt);
+}
+
+// Bad input: each mistake is one named error (no silent black caustic).
+TEST(SpecularManifoldSampling, BadCausticTagsAreNamedErrors) {
+    test::TempDir dir("loom-sms-bad");
+    auto expectThrows = [&](const std::string& sceneText, const std::string& what, bool atLoad) {
+        try {
+            auto scene = sceneFromJson(sceneText, dir);
+            ASSERT_FALSE(atLoad) << "loading should fail: " << what;
+            Renderer r(test::gpuContext(), smsGraph("sms.json"), 8, 8, 1);
+            r.setScene(scene);
+            r.frame();
+            FAIL() << "rendering should fail: " << what;
+        } catch (const UserError& e) {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    auto edit = [](std::string text, const std::string& from, const std::string& to) {
+        text.replace(text.find(from), from.size(), to);
+        return text;
+    };
+    expectThrows(edit(kMirrorScene, "\"caustic_receiver\": true,", ""),
+                 "casters but no caustic receivers", false);
+    expectThrows(edit(kMirrorScene, "\"material\": \"mirror\"", "\"material\": \"floor\""),
+                 "caustic casters need a dielectric or conductor material", true);
+    expectThrows(edit(kMirrorScene, "\"caustic_caster\"", "\"caustic_castr\""), "caustic_castr",
+                 true);
+    std::string noEmitter = edit(kMirrorScene, ", \"caustic_emitter\": true", "");
+    expectThrows(noEmitter, "no caustic emitters", false);
 }
 
 }  // namespace
