@@ -264,7 +264,9 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
             manifold_trial_ray_from(tr, v.p, v.ng, tr.ray_d);
             tr.ray_tmax = length(tr.y - v.p) * (1.0 - 1e-4);
         } else if (!manifold_trial_scatter_on(tr, tr.proposal, i)) {
-            if (seeding) tr.phase = TRIAL_FAILED;
+            // Total internal reflection: a seed chain ends here (the constraint's TIR swap
+            // can still walk it out); a re-traced chain has left its shape sequence.
+            if (seeding) evaluate = manifold_trial_begin_walk(tr);
             else manifold_trial_reject(tr, ms);
         }
     }
