@@ -82,7 +82,8 @@ ManifoldLight sms_pixel_light(SmsPixel st) {
     ml.pdf = st.light_y.w;
     ml.n = st.light_n.xyz;
     ml.light = floatBitsToUint(st.light_n.w);
-    ml.point = dot(ml.n, ml.n) == 0.0;
+    ml.directional = scene_lights[ml.light].type == LIGHT_DIRECTIONAL;
+    ml.point = dot(ml.n, ml.n) == 0.0 && !ml.directional;
     ml.s = vec3(0.0);
     ml.t = vec3(0.0);
     if (!ml.point) {

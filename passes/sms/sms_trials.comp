@@ -36,7 +36,7 @@ void main() {
     if (dot(ng0, st.wo.xyz) < 0.0) ng0 = -ng0;
     // The plane the chain's fixed end point moves in for the geometric term (walk.glsl).
     vec3 es = ml.s, et = ml.t;
-    if (ml.point) {
+    if (ml.point || ml.directional) {
         es = normalize(sh0.sp.dp_du);
         et = cross(sh0.sp.ng, es);
     }
@@ -106,7 +106,7 @@ void main() {
             // The next trial: a fresh seed on the casters, or MNEE's straight line.
             vec3 u = vec3(rng_next2(rng), rng_next(rng));
             bool straight = pc.estimator == ESTIMATOR_MNEE;
-            tr = manifold_trial_start(x0, ng0, ml.y, ml.n, es, et, straight,
+            tr = manifold_trial_start(x0, ng0, ml.y, ml.n, es, et, ml.directional, straight,
                                       straight ? ml.y : manifold_sample_caster(u));
             trials += 1u;
             pending = true;

@@ -1,7 +1,7 @@
 #version 460
 // Test kernel (passes/sms/tests/test_sms.cpp): one manifold trial (seed chain, Newton walk with
 // re-projection, visibility) against the loaded scene. Input rows, per column: 0 x0, 1 its
-// geometric normal, 2 y (light point), 3 ny (area light normal, 0: point light), 4 seed point
+// geometric normal, 2 y (light point), 3 ny (area light normal, 0: point light; w = 1: y is a direction, a directional light), 4 seed point
 // (w = 1: straight line to y, MNEE), 5 (constraint, max iterations, threshold, max chain),
 // 6/7 es/et (the end point's plane). Output rows: 0 (phase, iterations, k, endpoint det),
 // 1..4 chain vertices (w = triangle), 5 (beta, error of the final chain, 0, 0), 6 the first
@@ -28,7 +28,7 @@ void main() {
     ms.max_chain = uint(cfg.w);
     ManifoldTrial tr = manifold_trial_start(row(x, 0).xyz, row(x, 1).xyz, row(x, 2).xyz,
                                             row(x, 3).xyz, row(x, 6).xyz, row(x, 7).xyz,
-                                            row(x, 4).w != 0.0, row(x, 4).xyz);
+                                            row(x, 3).w != 0.0, row(x, 4).w != 0.0, row(x, 4).xyz);
     for (uint n = 0u; n < 400u && manifold_trial_running(tr); ++n) {
         Hit hit;
         bool found = trace_closest(tr.ray_o, tr.ray_d, tr.ray_tmin, tr.ray_tmax, BVH_MASK_ALL, hit);

@@ -51,13 +51,15 @@ struct ManifoldLight {
     float pdf;
     uint light;  // index into scene_lights
     bool point;
-    bool valid;  // false: no light SMS can connect to (untagged, directional, environment)
+    bool directional;  // y is the unit direction towards the light
+    bool valid;  // false: no light SMS can connect to (untagged, environment)
 };
 
 ManifoldLight manifold_sample_light(vec3 u) {
     ManifoldLight ml;
     ml.valid = false;
     ml.point = false;
+    ml.directional = false;
     ml.pdf = 0.0;
     ml.y = vec3(0.0);
     ml.n = vec3(0.0);
@@ -86,6 +88,11 @@ ManifoldLight manifold_sample_light(vec3 u) {
         ml.y = l.p0.xyz;
         ml.pdf = l.pmf;
         ml.point = true;
+        ml.valid = true;
+    } else if (l.type == LIGHT_DIRECTIONAL) {
+        ml.y = normalize(l.p0.xyz);
+        ml.pdf = l.pmf;
+        ml.directional = true;
         ml.valid = true;
     }
     return ml;
@@ -132,9 +139,10 @@ void manifold_trial_ray_towards(inout ManifoldTrial tr, vec3 p, vec3 ng, vec3 ta
 
 // Starts a trial from x0 towards seed (SMS: a point on a caster, scattered onwards) or along the
 // straight line to y (straight, MNEE).
-// (es, et): orthonormal basis of the light's plane (area lights) or of x0's (point lights).
+// (es, et): orthonormal basis of the light's plane (area lights) or of x0's (point and
+// directional lights). directional: y is the unit direction towards the light.
 ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, vec3 et,
-                                   bool straight, vec3 seed) {
+                                   bool directional, bool straight, vec3 seed) {
     ManifoldTrial tr;
     tr.phase = TRIAL_SEED;
     tr.straight = straight;
@@ -150,8 +158,10 @@ ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, 
     tr.et = et;
     tr.chain.k = 0u;
     tr.proposal.k = 0u;
-    manifold_trial_ray_towards(tr, x0, ng0, straight ? y : seed);
-    if (straight) tr.ray_tmax = length(y - x0) * (1.0 - 1e-4);
+    tr.chain.end_at_infinity = directional;
+    tr.proposal.end_at_infinity = directional;
+    manifold_trial_ray_towards(tr, x0, ng0, straight ? (directional ? x0 + y : y) : seed);
+    if (straight && !directional) tr.ray_tmax = length(y - x0) * (1.0 - 1e-4);
     return tr;
 }
 
@@ -173,7 +183,8 @@ void manifold_trial_evaluate(inout ManifoldTrial tr, ManifoldSettings ms) {
             return;
         }
         ManifoldVertex last = tr.chain.v[tr.chain.k - 1u];
-        ShadowRay r = shadow_ray_between(last.p, last.ng, tr.y, tr.ny);
+        ShadowRay r = tr.chain.end_at_infinity ? shadow_ray_infinite(last.p, last.ng, tr.y)
+                                               : shadow_ray_between(last.p, last.ng, tr.y, tr.ny);
         tr.ray_o = r.o;
         tr.ray_d = r.d;
         tr.ray_tmin = 0.0;
@@ -262,7 +273,7 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
         } else if (seeding && tr.straight) {
             ManifoldVertex v = tr.proposal.v[i];
             manifold_trial_ray_from(tr, v.p, v.ng, tr.ray_d);
-            tr.ray_tmax = length(tr.y - v.p) * (1.0 - 1e-4);
+            if (!tr.chain.end_at_infinity) tr.ray_tmax = length(tr.y - v.p) * (1.0 - 1e-4);
         } else if (!manifold_trial_scatter_on(tr, tr.proposal, i)) {
             // Total internal reflection: a seed chain ends here (the constraint's TIR swap
             // can still walk it out); a re-traced chain has left its shape sequence.
@@ -292,16 +303,23 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
     vec3 wi_local = shading_to_local(sh0, wi);
     vec3 f = bsdf_eval(sh0.mat, wo, wi_local);
     if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
-    vec3 T = manifold_chain_throughput(c, tr.x0);
+    float radiance_scale;
+    vec3 T = manifold_chain_throughput(c, tr.x0, radiance_scale);
     ManifoldVertex last = c.v[c.k - 1u];
     vec3 L;
     float G;
-    if (ml.point) {
-        // Irradiance I d omega_y / dA_x0 times the BSDF without its cosine (f is f |cos|).
-        vec3 w;
-        float dist;
-        vec3 Li = point_light_incident(scene_lights[ml.light], last.p, w, dist);
-        L = Li * dist * dist / max(abs(wi_local.z), 1e-8);
+    if (ml.point || ml.directional) {
+        // Irradiance I d omega_y / dA_x0 (point) or E |cos_k| |det| (directional), carried
+        // as flux (T without the radiance scaling), times the BSDF without its cosine.
+        vec3 E;
+        if (ml.point) {
+            vec3 w;
+            float dist;
+            E = point_light_incident(scene_lights[ml.light], last.p, w, dist) * dist * dist;
+        } else {
+            E = scene_lights[ml.light].p1.rgb;
+        }
+        L = E / (max(abs(wi_local.z), 1e-8) * radiance_scale);
         G = manifold_geometric_term(c, tr.x0, tr.y, false, tr.endpoint_det);
     } else {
         L = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n,

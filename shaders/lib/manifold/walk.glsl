@@ -125,14 +125,19 @@ vec2 manifold_constraint_derivative(uint kind, vec3 x_prev, ManifoldVertex v, ve
 }
 
 // The chain x0 -> v[0] .. v[k-1] -> y and what a Newton step needs of it.
+// With end_at_infinity, y is a unit direction (a directional light): the last vertex's w_o is
+// y wherever the vertex is.
 struct ManifoldChain {
     ManifoldVertex v[MANIFOLD_MAX_VERTICES];
     mat3 frame[MANIFOLD_MAX_VERTICES];  // angle-difference frames, chosen from the seed
     uint k;
+    bool end_at_infinity;
 };
 
 vec3 manifold_chain_prev(ManifoldChain c, uint i, vec3 x0) { return i == 0u ? x0 : c.v[i - 1u].p; }
-vec3 manifold_chain_next(ManifoldChain c, uint i, vec3 y) { return i + 1u == c.k ? y : c.v[i + 1u].p; }
+vec3 manifold_chain_next(ManifoldChain c, uint i, vec3 y) {
+    return i + 1u < c.k ? c.v[i + 1u].p : c.end_at_infinity ? c.v[i].p + y : y;
+}
 
 // Picks each vertex's angle frame from its current w_o (once per walk: the pole stays away
 // from where the walk starts; see manifold_angle_frame).
@@ -211,6 +216,7 @@ ManifoldLinearSolve manifold_linear_solve(uint kind, ManifoldChain c, vec3 x0, v
             } else if (j < 4u) {
                 dx = second ? v.t : v.s;
                 dn = second ? v.dn_dt : v.dn_ds;
+                if (i + 1u == c.k && c.end_at_infinity) dxn = dx;  // x + y moves with x
             } else {
                 if (i + 1u < c.k) dxn = second ? c.v[i + 1u].t : c.v[i + 1u].s;
                 else if (from_light) dxn = second ? et : es;
@@ -276,10 +282,11 @@ bool manifold_chain_types_valid(ManifoldChain c, vec3 x0, vec3 y, float min_leng
 // end-point Jacobian of manifold_linear_solve. Area light (from_light):
 // d omega_x0 / dA_y = |cos theta_1| / |x1 - x0|^2 |det(dx1/dy)|. Point light:
 // d omega_y / dA_x0 = |cos theta_k| / |y - x_k|^2 |det(dx_k/dx0)| (irradiance = I times this).
+// Directional light (end_at_infinity): the irradiance at x0 is E times |cos theta_k| |det|.
 float manifold_geometric_term(ManifoldChain c, vec3 x0, vec3 y, bool from_light, float det) {
-    vec3 a = from_light ? x0 : y;
     ManifoldVertex v = from_light ? c.v[0] : c.v[c.k - 1u];
-    vec3 d = a - v.p;
+    if (!from_light && c.end_at_infinity) return abs(dot(v.ng, y)) * det;
+    vec3 d = (from_light ? x0 : y) - v.p;
     float r2 = dot(d, d);
     return abs(dot(v.ng, d)) / (r2 * sqrt(r2)) * det;
 }
@@ -287,9 +294,12 @@ float manifold_geometric_term(ManifoldChain c, vec3 x0, vec3 y, bool from_light,
 // Throughput of the chain's specular vertices for radiance flowing y -> x0, as the path
 // tracer's delta BSDF samples weigh it: conductor specular F, dielectric transmittance
 // (1 - F) / eta^2 with eta across the interface from x0's side (bsdf.glsl dielectric_sample).
-// Zero for a one-sided conductor seen from behind.
-vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0) {
+// Zero for a one-sided conductor seen from behind. radiance_scale is the product of the 1/eta^2
+// factors, (n_x0 / n_y)^2: flux from a point or directional light crosses the chain with
+// T / radiance_scale (energy, no radiance compression), an area light's radiance with T.
+vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, out float radiance_scale) {
     vec3 T = vec3(1.0);
+    radiance_scale = 1.0;
     for (uint i = 0u; i < c.k; ++i) {
         ManifoldVertex v = c.v[i];
         vec3 wo = normalize(manifold_chain_prev(c, i, x0) - v.p);  // towards the camera side
@@ -302,6 +312,7 @@ vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0) {
             float F = fresnel_dielectric(cos_o, v.eta, cos_t);
             float e = cos_o >= 0.0 ? v.eta : 1.0 / v.eta;
             T *= v.specular * ((1.0 - F) / (e * e));
+            radiance_scale /= e * e;
         }
     }
     return T;
