@@ -184,6 +184,47 @@ struct ManifoldLinearSolve {
     bool ok;              // false: undefined or singular
 };
 
+// Row i of the linearized chain: the residual C_i and its Jacobian blocks A = dC_i/d(s,t)_{i-1}
+// (x0 along (es, et) for i = 0 unless from_light), B = dC_i/d(s,t)_i (normal change included),
+// Cn = dC_i/d(s,t)_{i+1} (y along (es, et) for i = k-1 when from_light). False where the
+// constraint is undefined.
+bool manifold_constraint_blocks(uint kind, ManifoldChain c, vec3 x0, vec3 y, bool from_light,
+                                vec3 es, vec3 et, uint i, out vec2 res, out mat2 A, out mat2 B,
+                                out mat2 Cn) {
+    vec3 xp = manifold_chain_prev(c, i, x0), xn = manifold_chain_next(c, i, y);
+    ManifoldVertex v = c.v[i];
+    bool valid;
+    res = manifold_constraint(kind, xp, v, xn, c.frame[i], valid);
+    A = mat2(0.0);
+    B = mat2(0.0);
+    Cn = mat2(0.0);
+    if (!valid) return false;
+    // Six directional derivatives: the previous vertex (or x0), this one, the next (or y), each
+    // along its two parameters; one call site for all.
+    vec3 z = vec3(0.0);
+    vec2 col[6];
+    for (uint j = 0u; j < 6u; ++j) {
+        bool second = (j & 1u) != 0u;
+        vec3 dxp = z, dx = z, dn = z, dxn = z;
+        if (j < 2u) {
+            if (i > 0u) dxp = second ? c.v[i - 1u].t : c.v[i - 1u].s;
+            else if (!from_light) dxp = second ? et : es;
+        } else if (j < 4u) {
+            dx = second ? v.t : v.s;
+            dn = second ? v.dn_dt : v.dn_ds;
+            if (i + 1u == c.k && c.end_at_infinity) dxn = dx;  // x + y moves with x
+        } else {
+            if (i + 1u < c.k) dxn = second ? c.v[i + 1u].t : c.v[i + 1u].s;
+            else if (from_light) dxn = second ? et : es;
+        }
+        col[j] = manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], dxp, dx, dn, dxn);
+    }
+    A = mat2(col[0], col[1]);
+    B = mat2(col[2], col[3]);
+    Cn = mat2(col[4], col[5]);
+    return true;
+}
+
 ManifoldLinearSolve manifold_linear_solve(uint kind, ManifoldChain c, vec3 x0, vec3 y,
                                           bool from_light, vec3 es, vec3 et) {
     ManifoldLinearSolve r;
@@ -193,39 +234,13 @@ ManifoldLinearSolve manifold_linear_solve(uint kind, ManifoldChain c, vec3 x0, v
     r.ok = false;
     mat2 A[MANIFOLD_MAX_VERTICES], B[MANIFOLD_MAX_VERTICES], Cn[MANIFOLD_MAX_VERTICES];
     vec2 res[MANIFOLD_MAX_VERTICES];
-    vec3 z = vec3(0.0);
     for (uint i = 0u; i < c.k; ++i) {
-        vec3 xp = manifold_chain_prev(c, i, x0), xn = manifold_chain_next(c, i, y);
-        ManifoldVertex v = c.v[i];
-        bool valid;
-        res[i] = manifold_constraint(kind, xp, v, xn, c.frame[i], valid);
-        if (!valid) {
+        if (!manifold_constraint_blocks(kind, c, x0, y, from_light, es, et, i, res[i], A[i], B[i],
+                                        Cn[i])) {
             r.error = -1.0;
             return r;
         }
         r.error = max(r.error, length(res[i]));
-        // Six directional derivatives: the previous vertex (or x0), this one, the next (or y),
-        // each along its two parameters; one call site for all.
-        vec2 col[6];
-        for (uint j = 0u; j < 6u; ++j) {
-            bool second = (j & 1u) != 0u;
-            vec3 dxp = z, dx = z, dn = z, dxn = z;
-            if (j < 2u) {
-                if (i > 0u) dxp = second ? c.v[i - 1u].t : c.v[i - 1u].s;
-                else if (!from_light) dxp = second ? et : es;
-            } else if (j < 4u) {
-                dx = second ? v.t : v.s;
-                dn = second ? v.dn_dt : v.dn_ds;
-                if (i + 1u == c.k && c.end_at_infinity) dxn = dx;  // x + y moves with x
-            } else {
-                if (i + 1u < c.k) dxn = second ? c.v[i + 1u].t : c.v[i + 1u].s;
-                else if (from_light) dxn = second ? et : es;
-            }
-            col[j] = manifold_constraint_derivative(kind, xp, v, xn, c.frame[i], dxp, dx, dn, dxn);
-        }
-        A[i] = mat2(col[0], col[1]);
-        B[i] = mat2(col[2], col[3]);
-        Cn[i] = mat2(col[4], col[5]);
     }
     // Right-hand sides: the residual (Newton) and the end point's derivative block.
     mat2 R[MANIFOLD_MAX_VERTICES];
