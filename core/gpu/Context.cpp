@@ -1,11 +1,11 @@
 #include "core/gpu/Context.h"
 
+#include <unistd.h>
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "core/util/Error.h"
 #include "core/util/Log.h"
@@ -22,11 +22,16 @@ void check(VkResult r, const char* what) {
 
 const char* deviceTypeName(VkPhysicalDeviceType t) {
     switch (t) {
-        case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
-        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
-        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
-        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
-        default: return "other";
+        case VK_PHYSICAL_DEVICE_TYPE_CPU:
+            return "cpu";
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+            return "discrete";
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+            return "integrated";
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+            return "virtual";
+        default:
+            return "other";
     }
 }
 
@@ -165,8 +170,9 @@ const ReflectedMember& PushConstants::member(const std::string& name, const char
                 expected = std::string(prefix[p]) + "vec" + std::to_string(count);
             }
             if (m.type != expected && !(m.type == "bool" && expected == "uint"))
-                throw GpuError(fmt::format("shader '{}': push constant '{}' is {} but was set as {}",
-                                           mPipeline->name(), name, m.type, expected));
+                throw GpuError(
+                    fmt::format("shader '{}': push constant '{}' is {} but was set as {}",
+                                mPipeline->name(), name, m.type, expected));
             return m;
         }
     }
@@ -174,7 +180,9 @@ const ReflectedMember& PushConstants::member(const std::string& name, const char
         fmt::format("shader '{}' has no push constant member '{}'", mPipeline->name(), name));
 }
 
-PushConstants& PushConstants::set(const std::string& name, float v) { return set(name, &v, 1); }
+PushConstants& PushConstants::set(const std::string& name, float v) {
+    return set(name, &v, 1);
+}
 PushConstants& PushConstants::set(const std::string& name, int32_t v) {
     return setInts(name, &v, 1);
 }
@@ -186,14 +194,12 @@ PushConstants& PushConstants::set(const std::string& name, const float* v, uint3
     std::memcpy(mBytes.data() + m.offset, v, 4 * count);
     return *this;
 }
-PushConstants& PushConstants::setUints(const std::string& name, const uint32_t* v,
-                                       uint32_t count) {
+PushConstants& PushConstants::setUints(const std::string& name, const uint32_t* v, uint32_t count) {
     const auto& m = member(name, "uint", count);
     std::memcpy(mBytes.data() + m.offset, v, 4 * count);
     return *this;
 }
-PushConstants& PushConstants::setInts(const std::string& name, const int32_t* v,
-                                      uint32_t count) {
+PushConstants& PushConstants::setInts(const std::string& name, const int32_t* v, uint32_t count) {
     const auto& m = member(name, "int", count);
     std::memcpy(mBytes.data() + m.offset, v, 4 * count);
     return *this;
@@ -238,6 +244,24 @@ VkDescriptorSet CommandList::allocateSet(VkDescriptorSetLayout layout) {
 
 void CommandList::dispatch(const ComputePipeline& pipeline, const Bindings& bindings,
                            const PushConstants* push, uint32_t gx, uint32_t gy, uint32_t gz) {
+    bind(pipeline, bindings, push);
+    if (gx && gy && gz) vkCmdDispatch(mCmd, gx, gy, gz);
+}
+
+void CommandList::dispatchIndirect(const ComputePipeline& pipeline, const Bindings& bindings,
+                                   const PushConstants* push, const Buffer& args,
+                                   VkDeviceSize offset) {
+    if (offset % 4 != 0 || offset + 12 > args.size())
+        throw GpuError(
+            fmt::format("shader '{}': indirect dispatch arguments at byte {} do not "
+                        "fit buffer '{}' ({} bytes, 4-byte aligned)",
+                        pipeline.name(), offset, args.name(), args.size()));
+    bind(pipeline, bindings, push);
+    vkCmdDispatchIndirect(mCmd, args.handle(), offset);
+}
+
+void CommandList::bind(const ComputePipeline& pipeline, const Bindings& bindings,
+                       const PushConstants* push) {
     const auto& refl = pipeline.reflection();
     std::vector<VkWriteDescriptorSet> writes;
     std::vector<VkDescriptorImageInfo> imageInfos;
@@ -257,8 +281,8 @@ void CommandList::dispatch(const ComputePipeline& pipeline, const Bindings& bind
             }
         }
         if (!res)
-            throw GpuError(fmt::format("shader '{}': resource '{}' is not bound", pipeline.name(),
-                                       b.name));
+            throw GpuError(
+                fmt::format("shader '{}': resource '{}' is not bound", pipeline.name(), b.name));
         VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         w.dstSet = set;
         w.dstBinding = b.binding;
@@ -285,9 +309,10 @@ void CommandList::dispatch(const ComputePipeline& pipeline, const Bindings& bind
             w.pBufferInfo = &bufferInfos.back();
             retain(*buf);
         } else {
-            throw GpuError(fmt::format("shader '{}': binding '{}' has an unsupported type "
-                                       "(Loom binds storage images and buffers)",
-                                       pipeline.name(), b.name));
+            throw GpuError(
+                fmt::format("shader '{}': binding '{}' has an unsupported type "
+                            "(Loom binds storage images and buffers)",
+                            pipeline.name(), b.name));
         }
         writes.push_back(w);
     }
@@ -296,15 +321,14 @@ void CommandList::dispatch(const ComputePipeline& pipeline, const Bindings& bind
         vkUpdateDescriptorSets(dev, uint32_t(writes.size()), writes.data(), 0, nullptr);
     vkCmdBindPipeline(mCmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
     if (set)
-        vkCmdBindDescriptorSets(mCmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1,
-                                &set, 0, nullptr);
+        vkCmdBindDescriptorSets(mCmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &set,
+                                0, nullptr);
     if (refl.pushConstants && refl.pushConstants->size > 0) {
         std::vector<uint8_t> zeros(refl.pushConstants->size, 0);
         const void* data = push ? push->bytes().data() : zeros.data();
         vkCmdPushConstants(mCmd, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
                            refl.pushConstants->size, data);
     }
-    if (gx && gy && gz) vkCmdDispatch(mCmd, gx, gy, gz);
 }
 
 void CommandList::dispatchThreads(const ComputePipeline& pipeline, const Bindings& bindings,
@@ -318,10 +342,13 @@ void CommandList::barrier() {
     VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
     mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
-                       VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+                       VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT |
+                       VK_ACCESS_INDIRECT_COMMAND_READ_BIT;
     VkPipelineStageFlags stages =
         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
-    vkCmdPipelineBarrier(mCmd, stages, stages, 0, 1, &mb, 0, nullptr, 0, nullptr);
+    // Indirect dispatch arguments are read in the draw-indirect stage.
+    vkCmdPipelineBarrier(mCmd, stages, stages | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, 0, 1, &mb, 0,
+                         nullptr, 0, nullptr);
 }
 
 void CommandList::clearImage(const Image& image, float value) {
@@ -450,8 +477,8 @@ void Context::init(const Options& options) {
         if (chosen < 0) {
             std::string list;
             for (auto& i : infos) list += fmt::format("\n  {}: {} ({})", i.index, i.name, i.type);
-            throw UserError(fmt::format("no Vulkan device matches '{}'; available:{}", selector,
-                                        list));
+            throw UserError(
+                fmt::format("no Vulkan device matches '{}'; available:{}", selector, list));
         }
     } else {
         for (uint32_t i = 0; i < infos.size() && chosen < 0; ++i)
@@ -495,8 +522,7 @@ void Context::init(const Options& options) {
     const auto& have = f2.features;
     want.features.shaderStorageImageExtendedFormats = have.shaderStorageImageExtendedFormats;
     want.features.shaderStorageImageReadWithoutFormat = have.shaderStorageImageReadWithoutFormat;
-    want.features.shaderStorageImageWriteWithoutFormat =
-        have.shaderStorageImageWriteWithoutFormat;
+    want.features.shaderStorageImageWriteWithoutFormat = have.shaderStorageImageWriteWithoutFormat;
     want.features.shaderInt64 = have.shaderInt64;
     want.features.shaderFloat64 = have.shaderFloat64;
 
@@ -608,13 +634,14 @@ std::shared_ptr<Buffer> Context::createBuffer(VkDeviceSize size, const std::stri
     VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     bci.size = buf->mSize;
     bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
-                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT;
     check(vkCreateBuffer(mDevice, &bci, nullptr, &buf->mBuffer), "vkCreateBuffer");
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(mDevice, buf->mBuffer, &req);
-    VkMemoryPropertyFlags props = hostVisible ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
-                                                    VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
-                                              : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+    VkMemoryPropertyFlags props =
+        hostVisible ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+                    : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
     buf->mMemory = allocate(req, props);
     check(vkBindBufferMemory(mDevice, buf->mBuffer, buf->mMemory, 0), "vkBindBufferMemory");
     if (hostVisible)
@@ -703,7 +730,8 @@ std::shared_ptr<ComputePipeline> Context::createPipeline(const std::vector<uint3
             case DescriptorKind::SampledImage:
                 x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
                 break;
-            default: throw GpuError(fmt::format("shader '{}': unsupported binding '{}'", name, b.name));
+            default:
+                throw GpuError(fmt::format("shader '{}': unsupported binding '{}'", name, b.name));
         }
         lb.push_back(x);
     }
@@ -732,7 +760,8 @@ std::shared_ptr<ComputePipeline> Context::createPipeline(const std::vector<uint3
     cpci.stage.module = module;
     cpci.stage.pName = "main";
     cpci.layout = p->mLayout;
-    VkResult r = vkCreateComputePipelines(mDevice, mPipelineCache, 1, &cpci, nullptr, &p->mPipeline);
+    VkResult r =
+        vkCreateComputePipelines(mDevice, mPipelineCache, 1, &cpci, nullptr, &p->mPipeline);
     vkDestroyShaderModule(mDevice, module, nullptr);
     check(r, "vkCreateComputePipelines");
     return p;
@@ -800,8 +829,8 @@ void Context::uploadBuffer(const Buffer& buffer, const void* data, size_t bytes,
 void Context::downloadBuffer(const Buffer& buffer, void* data, size_t bytes, size_t offset) {
     if (bytes == 0) return;
     if (offset + bytes > buffer.size())
-        throw GpuError(fmt::format("download of {} bytes overflows buffer '{}'", bytes,
-                                   buffer.name()));
+        throw GpuError(
+            fmt::format("download of {} bytes overflows buffer '{}'", bytes, buffer.name()));
     auto staging = createBuffer(bytes, "staging", true);
     auto cmd = beginCommands();
     VkBufferCopy region{offset, 0, bytes};

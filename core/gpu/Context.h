@@ -132,6 +132,11 @@ public:
     void dispatch(const ComputePipeline& pipeline, const Bindings& bindings,
                   const PushConstants* push, uint32_t groupsX, uint32_t groupsY = 1,
                   uint32_t groupsZ = 1);
+    // Workgroup counts read on the device from args at offset (three uints, as
+    // VkDispatchIndirectCommand): a kernel can size the next dispatch, down to no groups,
+    // without a round trip to the host. barrier() makes earlier writes of args visible.
+    void dispatchIndirect(const ComputePipeline& pipeline, const Bindings& bindings,
+                          const PushConstants* push, const Buffer& args, VkDeviceSize offset = 0);
     // Dispatch enough groups to cover width x height x depth threads.
     void dispatchThreads(const ComputePipeline& pipeline, const Bindings& bindings,
                          const PushConstants* push, uint32_t width, uint32_t height = 1,
@@ -160,12 +165,14 @@ private:
     std::vector<double> mTimestampsNs;
     std::vector<std::shared_ptr<void>> mRetained;
     VkDescriptorSet allocateSet(VkDescriptorSetLayout layout);
+    // Descriptor set, pipeline and push constants of a dispatch.
+    void bind(const ComputePipeline& pipeline, const Bindings& bindings, const PushConstants* push);
 };
 
 class Context {
 public:
     struct Options {
-        std::string device;  // "" = default (LOOM_DEVICE, else lavapipe, else first device)
+        std::string device;       // "" = default (LOOM_DEVICE, else lavapipe, else first device)
         bool validation = false;  // also enabled by LOOM_VALIDATION=1
         std::string cacheDir;     // "" = default cache directory (see shaderCacheDir())
         // Presentation (the inspector): extra extensions, and a test the queue family must

@@ -229,4 +229,10 @@ void KernelParams::dispatchGroups(ExecuteContext& ctx, gpu::Bindings& bindings, 
     gpu::PushConstants pc = prepare(ctx, bindings);
     ctx.cmd().dispatch(*mPipeline, bindings, mPush.members ? &pc : nullptr, x, y, z);
 }
+
+void KernelParams::dispatchIndirect(ExecuteContext& ctx, gpu::Bindings& bindings,
+                                    const gpu::Buffer& args, uint64_t offset) {
+    gpu::PushConstants pc = prepare(ctx, bindings);
+    ctx.cmd().dispatchIndirect(*mPipeline, bindings, mPush.members ? &pc : nullptr, args, offset);
+}
 }  // namespace loom

@@ -49,6 +49,9 @@ public:
     // The same with a group count instead of a thread count.
     void dispatchGroups(ExecuteContext& ctx, gpu::Bindings& bindings, uint32_t groupsX,
                         uint32_t groupsY = 1, uint32_t groupsZ = 1);
+    // The same with group counts a kernel wrote to args (gpu::CommandList::dispatchIndirect).
+    void dispatchIndirect(ExecuteContext& ctx, gpu::Bindings& bindings, const gpu::Buffer& args,
+                          uint64_t offset = 0);
 
     static constexpr const char* kUniformBlock = "PassParams";
 

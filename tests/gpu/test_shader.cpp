@@ -376,3 +376,51 @@ TEST_F(ShaderTest, MissingShaderAndVersion) {
 }
 
 }  // namespace
+
+// CommandList::dispatchIndirect: a kernel writes the next dispatch's group counts (at an
+// offset), the indirect dispatch runs exactly that many groups, zero groups run nothing, and
+// arguments outside the buffer are an error naming it.
+TEST_F(ShaderTest, IndirectDispatchTakesGroupCountsFromTheDevice) {
+    auto gpu = loom::test::gpuContext();
+    ShaderCompiler c({dir.path()}, "");
+    auto writer = c.compile(file("writer.comp", R"(#version 460
+layout(local_size_x = 1) in;
+layout(std430) buffer Args { uint args[]; };
+layout(push_constant) uniform P { uint groups; } pc;
+void main() { args[4] = pc.groups; args[5] = 2u; args[6] = 1u; }
+)"));
+    auto counter = c.compile(file("counter.comp", R"(#version 460
+layout(local_size_x = 4, local_size_y = 2) in;
+layout(std430) buffer Count { uint count; };
+void main() { atomicAdd(count, 1u); }
+)"));
+    auto pw = gpu->createPipeline(writer->spirv, writer->reflection, writer->path);
+    auto pcnt = gpu->createPipeline(counter->spirv, counter->reflection, counter->path);
+    auto args = gpu->createBuffer(7 * 4, "args");
+    auto count = gpu->createBuffer(4, "count");
+    for (uint32_t groups : {3u, 0u}) {
+        loom::gpu::Bindings b;
+        b.set("Args", args).set("Count", count);
+        loom::gpu::PushConstants push(*pw);
+        push.set("groups", groups);
+        auto cmd = gpu->beginCommands();
+        cmd->fillBuffer(*count, 0);
+        cmd->barrier();
+        cmd->dispatch(*pw, b, &push, 1);
+        cmd->barrier();
+        cmd->dispatchIndirect(*pcnt, b, nullptr, *args, 16);
+        gpu->submit(*cmd);
+        uint32_t n = ~0u;
+        gpu->downloadBuffer(*count, &n, 4);
+        EXPECT_EQ(n, groups * 2 * 8) << groups << " x 2 groups of 8 invocations";
+    }
+    loom::gpu::Bindings b;
+    b.set("Count", count);
+    auto cmd = gpu->beginCommands();
+    try {
+        cmd->dispatchIndirect(*pcnt, b, nullptr, *args, 20);
+        FAIL() << "arguments past the end of the buffer must be an error";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("args"), std::string::npos) << e.what();
+    }
+}
