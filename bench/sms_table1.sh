@@ -2,14 +2,16 @@
 # Specular manifold sampling: the columns of Hong et al. 2025, Table 1 (sample success rate,
 # Newton iterations per sample, Bernoulli trials per solution, Newton iterations per solution)
 # and GPU ms per pass for unbiased SMS, then PT / unbiased SMS / biased SMS (M = 1, 4, 16) / MNEE
-# at equal GPU time against a path-traced reference (scripts/restir_equal_time.lua with
-# bench/data/sms_configs.json: relMSE and MAPE curves, a convergence plot per scene).
+# at equal GPU time against a path-traced reference (scripts/sms_equal_time.lua with
+# bench/data/sms_configs.json: relMSE inside the caustic region, the ratio to PT, the energy
+# biased SMS and MNEE lose, a convergence plot per scene).
 # Prints tables; never asserts. BUILD defaults to build-bench.
 #
 #   bash bench/sms_table1.sh                          # 256x256, Table 1 only
 #   EQUAL_TIME=1 WIDTH=64 HEIGHT=64 BUDGET_MS=4000 bash bench/sms_table1.sh
 #
-# Scenes: the project's glass sphere, curved mirror and slab (scenes/refractive_caustic.json),
+# Scenes: the project's glass sphere, curved mirror, wavy slab (both faces wavy) and the slab with
+# a flat bottom (scenes/refractive_caustic.json),
 # and, when ../shared/scenes is present, sms-plane and sms-sphere (their casters are
 # normal-mapped, which the walk does not model yet: those rows say so).
 set -euo pipefail
@@ -20,7 +22,7 @@ cd "$ROOT"
 [ -x "$LOOM" ] || { echo "build loom first: cmake -S . -B build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release && ninja -C build-bench loom" >&2; exit 2; }
 W=${WIDTH:-256} H=${HEIGHT:-256} FRAMES=${FRAMES:-4}
 uptime
-scenes="scenes/glass_sphere.json scenes/curved_mirror.json scenes/refractive_caustic.json"
+scenes="scenes/glass_sphere.json scenes/curved_mirror.json scenes/wavy_slab.json scenes/refractive_caustic.json"
 for s in ../shared/scenes/sms-plane/plane_sms_constfloor.xml ../shared/scenes/sms-sphere/sphere_sms_constfloor.xml; do
     [ -e "$s" ] && scenes="$scenes $s"
 done
@@ -40,8 +42,8 @@ for scene in $scenes; do
 done
 echo "(Hong et al. 2025 Table 1, SMS column: plane 1182 iterations per solution, slab 67)"
 if [ "${EQUAL_TIME:-0}" = 1 ]; then
-    "$LOOM" run scripts/restir_equal_time.lua configs=bench/data/sms_configs.json cameras=static \
+    "$LOOM" run scripts/sms_equal_time.lua configs=bench/data/sms_configs.json \
         width="$W" height="$H" budget_ms="${BUDGET_MS:-8000}" steps=4 ref_frames="${REF_FRAMES:-64}" \
-        ref_spp="${REF_SPP:-64}" scenes=scenes/glass_sphere.json,scenes/curved_mirror.json,scenes/refractive_caustic.json \
+        ref_spp="${REF_SPP:-64}" scenes=scenes/glass_sphere.json,scenes/curved_mirror.json,scenes/wavy_slab.json \
         out=out/sms_equal_time
 fi

@@ -63,29 +63,7 @@ local configs = {
 local configs_file = loom.arg("configs", "")
 if configs_file ~= "" then configs = loom.read_json(configs_file) end
 
-local function exists(path)
-  local f = io.open(path, "r")
-  if f then f:close() end
-  return f ~= nil
-end
-
--- A scene path as given, else relative to the Loom source tree (this script's parent folder),
--- as loom.renderer looks files up; nil when neither exists.
-local source = debug and debug.getinfo(1, "S").source or ""
-local script_dir = source:match("^@(.*)[/\\]") or "."
-local function resolve(path)
-  if exists(path) then return path end
-  local in_tree = script_dir .. "/../" .. path
-  if path:sub(1, 1) ~= "/" and exists(in_tree) then return in_tree end
-  return nil
-end
-
--- Scene name for files and tables: the file stem, or its folder for Mitsuba's "scene.xml".
-local function stem_of(path)
-  local stem = path:match("([^/\\]+)%.%w+$") or "scene"
-  if stem == "scene" then stem = path:match("([^/\\]+)[/\\][^/\\]+$") or stem end
-  return stem
-end
+local resolve, stem_of = util.resolve, util.stem_of
 
 -- relMSE without the worst `frac` of the pixels (per-pixel relMSE, loom.metrics' eps = 0.01):
 -- fireflies dominate relMSE in scenes like veach-ajar; this shows the error of the rest.

@@ -96,6 +96,30 @@ function util.print_table(columns, rows)
   for i = 1, #rows do line(cells[i]) end
 end
 
+local function exists(path)
+  local f = io.open(path, "r")
+  if f then f:close() end
+  return f ~= nil
+end
+
+-- A file path as given, else relative to the Loom source tree (this module's parent folder),
+-- as loom.renderer looks files up; nil when neither exists.
+local util_source = debug and debug.getinfo(1, "S").source or ""
+local util_dir = util_source:match("^@(.*)[/\\]") or "."
+function util.resolve(path)
+  if exists(path) then return path end
+  local in_tree = util_dir .. "/../" .. path
+  if path:sub(1, 1) ~= "/" and exists(in_tree) then return in_tree end
+  return nil
+end
+
+-- Scene name for files and tables: the file stem, or its folder for Mitsuba's "scene.xml".
+function util.stem_of(path)
+  local stem = path:match("([^/\\]+)%.%w+$") or "scene"
+  if stem == "scene" then stem = path:match("([^/\\]+)[/\\][^/\\]+$") or stem end
+  return stem
+end
+
 -- True when every y value of every series is > 0 (a log axis can show them all).
 function util.all_positive(series)
   for _, s in ipairs(series) do

@@ -43,6 +43,9 @@ public:
         r.scratchBuffer("solutions")
             .bytesPerPixel(kSolutionSetBytes)
             .doc("biased SMS: unique solutions found per pixel");
+        r.scratchBuffer("active").bytesPerPixel(8).doc(
+            "two lists of the pixels whose estimate still runs (trial dispatches take them "
+            "packed)");
         r.paramEnum("estimator", "unbiased", {"unbiased", "biased", "mnee"})
             .doc(
                 "unbiased SMS (Bernoulli trials), biased SMS (unique solutions of M trials), or "
@@ -92,6 +95,9 @@ public:
                               {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"}};
         auto resolve = compileKernel(*this, ctx.shaders(), "passes/sms/sms_resolve.comp", defines);
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
+        if (!mDispatchArgs) mDispatchArgs = ctx.gpu().createBuffer(3 * 16, "SmsDispatchArgs");
+        ctx.cmd().fillBuffer(*mDispatchArgs, 1u);  // (1, 1, 1) groups each
+        ctx.cmd().barrier();
         float minSegment = 1e-4f * std::max(scene.boundingSphere().w, 1e-6f);
 
         gpu::Bindings b;
@@ -100,6 +106,8 @@ public:
             .set("SmsPixels", ctx.scratchBuffer("pixels"))
             .set("SmsSolutions", ctx.scratchBuffer("solutions"))
             .set("SmsCounters", counters)
+            .set("SmsActive", ctx.scratchBuffer("active"))
+            .set("SmsDispatchArgs", mDispatchArgs)
             .set("pathImage", ctx.scratchTexture("path"))
             .set("colorImage", ctx.texture("color"));
         if (ctx.has("caustic")) b.set("causticImage", ctx.texture("caustic"));
@@ -107,12 +115,15 @@ public:
         auto params = [&](gpu::ComputePipeline& p) {
             KernelParams k(*this, p, ctx);
             k.set("minSegment", minSegment);
+            k.set("dispatchIndex", 0u);
             return k;
         };
         params(*mPath).dispatch(ctx, b, ctx.width(), ctx.height());
         for (int i = 0; i < param<int>("trialDispatches"); ++i) {
             ctx.cmd().barrier();
-            params(*mTrials).dispatch(ctx, b, ctx.width(), ctx.height());
+            params(*mTrials)
+                .set("dispatchIndex", uint32_t(i))
+                .dispatchIndirect(ctx, b, *mDispatchArgs, 16 * (i % 3));
         }
         ctx.cmd().barrier();
         params(*resolve).dispatch(ctx, b, ctx.width(), ctx.height());
@@ -208,9 +219,9 @@ private:
     }
 
     std::shared_ptr<gpu::ComputePipeline> mPath, mTrials;
-    std::shared_ptr<gpu::Buffer> mCasters;
+    std::shared_ptr<gpu::Buffer> mCasters, mDispatchArgs;
     const scene::Scene* mCasterScene = nullptr;
-    gpu::CounterBuffer<8> mCounters{"SmsCounters"};
+    gpu::CounterBuffer<11> mCounters{"SmsCounters"};  // 8 totals, 3 list lengths
     double mTotals[8] = {};
     bool mWarnedLoopLimit = false, mWarnedCap = false;
 };

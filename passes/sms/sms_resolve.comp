@@ -21,8 +21,9 @@ void main() {
     vec3 caustic = vec3(0.0);
     if (status == SMS_DONE || status == SMS_BIASED) {
         caustic = st.value.rgb;
-    } else if (status == SMS_BERNOULLI) {
-        // Out of dispatches before the solution came back: the trial cap, reached early.
+    } else if (status == SMS_BERNOULLI || status == SMS_FIRST) {
+        // Out of dispatches before the solution came back (or before the first walk ended):
+        // the trial cap, reached early.
         atomicAdd(sms_capped, 1u);
         st.counts.w = 1u;
         caustic = pc.trialCap == TRIAL_CAP_DROP ? vec3(0.0) : st.value.rgb * st.target.w;

@@ -778,6 +778,14 @@ TEST(SpecularManifoldSampling, UnbiasedOnTheCurvedMirrorAgainstThePathTracer) {
     EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
 }
 
+// Two refractions with normal variation at both vertices (the wavy slab's faces differ).
+TEST(SpecularManifoldSampling, UnbiasedThroughTheWavySlabAgainstThePathTracer) {
+    auto scene = scene::loadScene(sourcePath("scenes/wavy_slab.json"));
+    int scale = std::getenv("LOOM_SLAB_SCALE") ? std::atoi(std::getenv("LOOM_SLAB_SCALE")) : 1;
+    auto c = compareWithPathTracer(scene, {}, 128 * scale, 64 * scale, 32, 2);
+    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+}
+
 // The bias class the exclusion prevents: with the covered paths left in the path part, the
 // image brightens by the caustic, and the same comparison must see it.
 TEST(SpecularManifoldSampling, DoubleCountingIsDetected) {
