@@ -15,7 +15,7 @@
 --     miss the budget by up to a frame);
 --   - energy: luminance summed over the caustic region relative to the reference (the energy
 --     biased SMS and MNEE lose), and the same per block of a regions x regions grid (worst
---     block shown; all in the CSV).
+--     block shown, blocks under 5% of the average block's reference skipped; all in the CSV).
 -- Arguments: scenes (comma list; missing files are skipped), width, height, budget_ms, steps,
 -- ref_frames, ref_spp, mask_frames, mask_fraction, regions, seed, configs, out.
 -- Writes OUT/sms_equal_time.csv (every step), OUT/sms_regions.csv (energy per block),
@@ -62,9 +62,13 @@ local function measure(img, ref, mask)
       end
     end
   end
-  local ratios = {}
+  -- Blocks darker than 5% of the average block carry no energy worth a ratio (nil).
+  local ratios, total = {}, 0
+  for i = 1, regions * regions do total = total + block_ref[i] end
   for i = 1, regions * regions do
-    ratios[i] = block_ref[i] > 0 and block[i] / block_ref[i] or 1
+    if block_ref[i] > 0.05 * total / (regions * regions) then
+      ratios[i] = block[i] / block_ref[i]
+    end
   end
   return {relmse = n > 0 and err / n or 0, energy = sum_ref > 0 and sum / sum_ref or 1,
           blocks = ratios, pixels = n}
@@ -125,10 +129,11 @@ for _, scene_arg in ipairs(scenes) do
       end
       series[c] = {name = cfg.name, x = xs, y = ys}
       local worst = 1
-      for i, v in ipairs(last.blocks) do
+      for i = 1, regions * regions do
+        local v = last.blocks[i]
         region_rows[#region_rows + 1] = {scene = name, config = cfg.name, block = i - 1,
-                                         energy = v}
-        if math.abs(v - 1) > math.abs(worst - 1) then worst = v end
+                                         energy = v or ""}
+        if v and math.abs(v - 1) > math.abs(worst - 1) then worst = v end
       end
       local row = {scene = name, config = cfg.name, frames = frames, gpu_ms = spent,
                    ms_per_frame = spent / frames, relmse = rows[#rows].relmse,

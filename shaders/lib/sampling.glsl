@@ -63,4 +63,11 @@ vec3 sample_uniform_sphere(vec2 u) {
     return vec3(r * cos(phi), r * sin(phi), z);
 }
 
+// A point uniform by area on triangle (a, b, c) from u in [0, 1)^2 (square-root warp,
+// pbrt-v4 SampleUniformTriangle up to the vertex order).
+vec3 sample_triangle_point(vec2 u, vec3 a, vec3 b, vec3 c) {
+    float su = sqrt(u.x);
+    return (1.0 - su) * a + su * (1.0 - u.y) * b + su * u.y * c;
+}
+
 #endif

@@ -38,8 +38,7 @@ vec3 manifold_sample_caster(vec3 u) {
     }
     vec3 a, b, c;
     triangle_positions(manifold_casters[lo].x, a, b, c);
-    float su = sqrt(u.x);
-    return (1.0 - su) * a + su * (1.0 - u.y) * b + su * u.y * c;
+    return sample_triangle_point(u.xy, a, b, c);
 }
 
 // The light end of a chain: a point sampled by area on an emissive triangle (pdf per area,
@@ -74,8 +73,7 @@ ManifoldLight manifold_sample_light(vec3 u) {
     if (l.type == LIGHT_TRIANGLE) {
         vec3 a, b, c;
         triangle_positions(l.index, a, b, c);
-        float su = sqrt(u.x);
-        ml.y = (1.0 - su) * a + su * (1.0 - u.y) * b + su * u.y * c;
+        ml.y = sample_triangle_point(u.xy, a, b, c);
         vec3 cr = cross(b - a, c - a);
         float area = 0.5 * length(cr);
         if (!(area > 0.0)) return ml;
