@@ -19,7 +19,9 @@
 
 // Specular vertices a chain may have (two refractions through a slab or a sphere, short
 // reflection chains).
+#ifndef MANIFOLD_MAX_VERTICES
 #define MANIFOLD_MAX_VERTICES 4
+#endif
 
 struct ManifoldVertex {
     vec3 p;
@@ -28,13 +30,10 @@ struct ManifoldVertex {
     vec3 s, t;          // orthonormal basis of the triangle plane: the vertex's parameters
     vec3 dn_ds, dn_dt;  // derivatives of n along s and t
     vec3 tangent;       // fixed reference (dp/du) of the half-vector frame
-    vec3 specular;      // specular reflectance (conductor) or transmittance (dielectric)
-    vec3 cond_eta, cond_k;
     float eta;          // int / ext IOR (dielectric)
     uint prim;
-    uint shape;
+    uint shape;         // its material gives the throughput (manifold_chain_throughput)
     bool reflection;    // conductor: mirror reflection; dielectric: refraction
-    bool two_sided;
 };
 
 // Whether a shape's material scatters as a manifold walk models it: smooth conductors reflect,
@@ -65,10 +64,6 @@ ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     v.dn_dt = sp.dn_du * uv_t.x + sp.dn_dv * uv_t.y;
     v.tangent = sp.dp_du;
     v.reflection = material_type(m) == MATERIAL_CONDUCTOR;
-    v.two_sided = material_two_sided(m);
-    v.specular = v.reflection ? m.specular.rgb : m.transmittance.rgb;
-    v.cond_eta = m.cond_eta.rgb;
-    v.cond_k = m.cond_k.rgb;
     v.eta = material_eta(m);
     return v;
 }
@@ -317,16 +312,18 @@ vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, out float radiance_scal
     radiance_scale = 1.0;
     for (uint i = 0u; i < c.k; ++i) {
         ManifoldVertex v = c.v[i];
+        // Material data stays out of the vertex: a walk carries two chains per lane.
+        Material m = scene_materials[scene_shapes[v.shape].material];
         vec3 wo = normalize(manifold_chain_prev(c, i, x0) - v.p);  // towards the camera side
         float cos_o = dot(wo, v.n);
         if (v.reflection) {
-            if (cos_o <= 0.0 && !v.two_sided) return vec3(0.0);
-            T *= v.specular * fresnel_conductor(abs(cos_o), v.cond_eta, v.cond_k);
+            if (cos_o <= 0.0 && !material_two_sided(m)) return vec3(0.0);
+            T *= m.specular.rgb * fresnel_conductor(abs(cos_o), m.cond_eta.rgb, m.cond_k.rgb);
         } else {
             float cos_t;
             float F = fresnel_dielectric(cos_o, v.eta, cos_t);
             float e = cos_o >= 0.0 ? v.eta : 1.0 / v.eta;
-            T *= v.specular * ((1.0 - F) / (e * e));
+            T *= m.transmittance.rgb * ((1.0 - F) / (e * e));
             radiance_scale /= e * e;
         }
     }
