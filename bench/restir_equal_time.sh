@@ -16,12 +16,7 @@
 # references. The compared image is accum.output: accumulated ReSTIR frames are correlated
 # (they share reservoirs) but consistent. GPU timings depend on the machine's load: run it on
 # an idle machine and report `uptime`.
-set -euo pipefail
-ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-BUILD="${BUILD:-$ROOT/build-bench}"
-LOOM="$BUILD/apps/loom"
-cd "$ROOT"
-[ -x "$LOOM" ] || { echo "build loom first: cmake -S . -B build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release && ninja -C build-bench loom" >&2; exit 2; }
+source "$(dirname "$0")/lib.sh"
 uptime
 "$LOOM" run scripts/restir_equal_time.lua width="${WIDTH:-128}" height="${HEIGHT:-128}" \
     budget_ms="${BUDGET_MS:-6000}" steps=5 move_frames=16 repeats="${REPEATS:-8}" ref_frames=32 ref_spp=64 \

@@ -14,12 +14,7 @@
 # a flat bottom (scenes/refractive_caustic.json),
 # and, when ../shared/scenes is present, sms-plane and sms-sphere (their casters are
 # normal-mapped, which the walk does not model yet: those rows say so).
-set -euo pipefail
-ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-BUILD="${BUILD:-$ROOT/build-bench}"
-LOOM="$BUILD/apps/loom"
-cd "$ROOT"
-[ -x "$LOOM" ] || { echo "build loom first: cmake -S . -B build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release && ninja -C build-bench loom" >&2; exit 2; }
+source "$(dirname "$0")/lib.sh"
 W=${WIDTH:-256} H=${HEIGHT:-256} FRAMES=${FRAMES:-4}
 uptime
 scenes="scenes/glass_sphere.json scenes/curved_mirror.json scenes/wavy_slab.json scenes/refractive_caustic.json"

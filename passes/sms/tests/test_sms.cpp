@@ -239,27 +239,53 @@ TEST(SpecularManifoldWalk, MirrorSphereConvergesToTheReflectionPoint) {
                 converged, worst);
 }
 
-// Half-vector walks refracting out of the denser side do not converge yet (issue 15 note).
-constexpr bool kHalfVectorFromInside = false;
+// Unpolarised dielectric Fresnel reflectance from the rarer side, cos_i > 0, eta = n_t / n_i.
+double fresnelDielectric(double cosI, double eta) {
+    double sin2T = (1 - cosI * cosI) / (eta * eta);
+    if (sin2T >= 1) return 1;
+    double cosT = std::sqrt(1 - sin2T);
+    double rs = (cosI - eta * cosT) / (cosI + eta * cosT),
+           rp = (eta * cosI - cosT) / (eta * cosI + cosT);
+    return 0.5 * (rs * rs + rp * rp);
+}
 
-// A flat water surface (IOR 1.33) at y = 1 over the floor, a point light above it: the walk
-// converges to the refraction point of Snell's law, found here by bisection in the plane of
-// incidence.
-TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
-    test::TempDir dir("loom-sms");
-    auto scene = sceneFromJson(R"({
+// A pool: floor (albedo 0.5) at y = 0 under a flat water surface (IOR 1.33) at y = 1, seen by
+// a camera under water; a light above. The caustic on the floor in closed form:
+//  - directional light of irradiance E from polar angle theta: the beam stays parallel, so
+//    E_floor = E cos(theta) (1 - F(theta)), the same everywhere;
+//  - point light of intensity I at height 1 above the surface: rho(theta_a) = tan theta_a +
+//    tan theta_w (sin theta_a = 1.33 sin theta_w) maps the emission angle to the floor radius,
+//    so E_floor = I (1 - F) sin theta_a / (rho d rho / d theta_a).
+// Flux crosses the surface without the radiance's 1/eta^2: a radiance throughput here reads
+// 1.33^2 = 1.77 times too bright.
+std::string poolScene(const std::string& light) {
+    return R"({
       "loom_scene": 1,
-      "camera": {"origin": [0, 0.5, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
+      "camera": {"origin": [0, 0.6, 1.0], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
       "materials": {"water": {"type": "dielectric", "ior": 1.33},
                     "floor": {"type": "diffuse", "reflectance": 0.5}},
       "shapes": [
         {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
          "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
         {"name": "water", "type": "rectangle", "material": "water", "caustic_caster": true,
-         "transform": [{"scale": 3}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, 1, 0]}]}],
-      "lights": [{"type": "point", "position": [0.4, 2, -0.2], "intensity": 1, "caustic_emitter": true}]
-    })",
-                               dir);
+         "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, 1, 0]}]}],
+      "lights": [)" +
+           light + R"(]
+    })";
+}
+
+// Half-vector walks refracting out of the denser side do not converge yet (issue 15 note).
+constexpr bool kHalfVectorFromInside = false;
+
+// The flat pool (poolScene) with a point light above it: the walk
+// converges to the refraction point of Snell's law, found here by bisection in the plane of
+// incidence.
+TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
+    test::TempDir dir("loom-sms");
+    auto scene = sceneFromJson(
+        poolScene(
+            R"({"type": "point", "position": [0.4, 2, -0.2], "intensity": 1, "caustic_emitter": true})"),
+        dir);
     const glm::dvec3 light(0.4, 2, -0.2);
     std::mt19937 rng(8);
     std::uniform_real_distribution<float> u(-1, 1);
@@ -295,41 +321,6 @@ TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
     // Seeds past the critical angle start from total internal reflection and mostly fail.
     EXPECT_GT(converged, 32);
     std::printf("flat interface: %d of %zu walks converged\n", converged, in.size());
-}
-
-// Unpolarised dielectric Fresnel reflectance from the rarer side, cos_i > 0, eta = n_t / n_i.
-double fresnelDielectric(double cosI, double eta) {
-    double sin2T = (1 - cosI * cosI) / (eta * eta);
-    if (sin2T >= 1) return 1;
-    double cosT = std::sqrt(1 - sin2T);
-    double rs = (cosI - eta * cosT) / (cosI + eta * cosT),
-           rp = (eta * cosI - cosT) / (eta * cosI + cosT);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
-// A pool: floor (albedo 0.5) at y = 0 under a flat water surface (IOR 1.33) at y = 1, seen by
-// a camera under water; a light above. The caustic on the floor in closed form:
-//  - directional light of irradiance E from polar angle theta: the beam stays parallel, so
-//    E_floor = E cos(theta) (1 - F(theta)), the same everywhere;
-//  - point light of intensity I at height 1 above the surface: rho(theta_a) = tan theta_a +
-//    tan theta_w (sin theta_a = 1.33 sin theta_w) maps the emission angle to the floor radius,
-//    so E_floor = I (1 - F) sin theta_a / (rho d rho / d theta_a).
-// Flux crosses the surface without the radiance's 1/eta^2: a radiance throughput here reads
-// 1.33^2 = 1.77 times too bright.
-std::string poolScene(const std::string& light) {
-    return R"({
-      "loom_scene": 1,
-      "camera": {"origin": [0, 0.6, 1.0], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
-      "materials": {"water": {"type": "dielectric", "ior": 1.33},
-                    "floor": {"type": "diffuse", "reflectance": 0.5}},
-      "shapes": [
-        {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
-         "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
-        {"name": "water", "type": "rectangle", "material": "water", "caustic_caster": true,
-         "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, 1, 0]}]}],
-      "lights": [)" +
-           light + R"(]
-    })";
 }
 
 double poolPointCaustic(glm::dvec3 x, glm::dvec3 light) {
