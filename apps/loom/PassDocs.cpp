@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/util/Error.h"
+#include "core/util/AtomicFile.h"
 
 namespace loom {
 
@@ -153,8 +154,7 @@ int updatePassDocs(const json& passes, const std::vector<std::string>& files, bo
             out.append(tables).append(close).push_back('\n');
         }
         if (fileChanged && !check) {
-            std::ofstream o(file, std::ios::binary);
-            o << out;
+            writeTextFileAtomic(file, "README", out);
         }
         changed += fileChanged;
     }

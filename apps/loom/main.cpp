@@ -1,6 +1,8 @@
 // loom: command-line front end. Usage and input errors exit 2 with one clear message;
 // internal errors exit 1.
+#include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -134,9 +136,11 @@ bool isHelp(const std::string& a) {
     return a == "--help" || a == "-h";
 }
 
-json parseValue(const std::string& v) {
+json parseValue(const std::string& opt, const std::string& v) {
     try {
         return json::parse(v);
+    } catch (const json::out_of_range&) {
+        throw UsageError(opt + ": number out of range: '" + v + "'");
     } catch (const json::parse_error&) {
         return json(v);  // bare words are strings: --set tm.operator=reinhard
     }
@@ -206,11 +210,30 @@ int cmdRender(const std::vector<std::string>& args) {
     if (frames == 0) throw UsageError("render: --frames must be at least 1");
 
     Renderer r(o);
-    for (auto& [k, v] : sets) r.graph().setParam(k, parseValue(v));
+    for (auto& [k, v] : sets) r.graph().setParam(k, parseValue("--set " + k, v));
     logInfo("device: {}", r.gpu().deviceInfo().name);
     std::map<std::string, double> passMs, statSums;
     // Timings skip the first frame when there are more: drivers such as lavapipe compile
     // pipelines at their first dispatch, inside the GPU timestamps.
+    // Every output is resolved and its path checked before the first frame, so that a bad path
+    // fails now and not after a long render.
+    if (outputs.empty()) {
+        if (out.empty()) out = "out/" + r.graph().name() + ".png";
+        outputs.push_back({portForOut(r.graph(), out), out});
+    } else if (!out.empty()) {
+        outputs.insert(outputs.begin(), {portForOut(r.graph(), out), out});
+    }
+    for (auto& [port, file] : outputs) {
+        const auto& marked = r.graph().outputs();
+        if (std::find(marked.begin(), marked.end(), port) == marked.end()) {
+            std::string list;
+            for (auto& m : marked) list += (list.empty() ? "" : ", ") + m;
+            throw UsageError("--output " + port + "=" + file + ": '" + port +
+                             "' is not a marked output of graph '" + r.graph().name() +
+                             "' (marked: " + list + ")");
+        }
+        checkImagePath(file);
+    }
     uint32_t timed = frames > 1 ? frames - 1 : 1;
     auto start = std::chrono::steady_clock::now();
     for (uint32_t f = 0; f < frames; ++f) {
@@ -228,12 +251,6 @@ int cmdRender(const std::vector<std::string>& args) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (checkNan) r.checkNaN();
 
-    if (outputs.empty()) {
-        if (out.empty()) out = "out/" + r.graph().name() + ".png";
-        outputs.push_back({portForOut(r.graph(), out), out});
-    } else if (!out.empty()) {
-        outputs.insert(outputs.begin(), {portForOut(r.graph(), out), out});
-    }
     for (auto& [port, file] : outputs) {
         writeImage(file, r.readOutput(port));
         std::printf("wrote %s (%s, %ux%u, %u frame%s)\n", file.c_str(), port.c_str(), o.width,
@@ -483,6 +500,9 @@ int cmdDevices(const std::vector<std::string>& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Past a file-size limit (ulimit -f) a write then fails with EFBIG and is reported,
+    // instead of the process being killed half-way through a file.
+    std::signal(SIGXFSZ, SIG_IGN);
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || isHelp(args[0])) {
         std::cout << kMainHelp;

@@ -164,6 +164,9 @@ std::string describe(const json& v) {
 }
 
 void checkRange(const ParamDesc& d, double x) {
+    // NaN compares false against every bound, so it is named before the range test.
+    if (!std::isfinite(x))
+        throw ParamError(fmt::format("parameter '{}' = {} is not a finite number", d.name, x));
     if ((d.min && x < *d.min) || (d.max && x > *d.max)) {
         std::string range = fmt::format("[{}, {}]", d.min ? fmt::format("{}", *d.min) : "-inf",
                                         d.max ? fmt::format("{}", *d.max) : "inf");
@@ -188,6 +191,9 @@ json validateParam(const ParamDesc& d, const json& v) {
             }
             if (v.is_number_float() && v.get<double>() == std::floor(v.get<double>())) {
                 checkRange(d, v.get<double>());
+                if (std::abs(v.get<double>()) > 9.0e18)
+                    throw ParamError(fmt::format("parameter '{}' = {} does not fit an integer",
+                                                 d.name, v.get<double>()));
                 return json(int64_t(v.get<double>()));
             }
             throw wrongType("an integer");

@@ -10,6 +10,7 @@
 #include "core/graph/CompileStages.h"
 #include "core/util/Hash.h"
 #include "core/util/Log.h"
+#include "core/util/AtomicFile.h"
 
 namespace loom {
 
@@ -240,9 +241,7 @@ json RenderGraph::toJson() const {
 
 void RenderGraph::save(const std::string& path) const {
     validate();  // never save a graph that would not load
-    std::ofstream out(path);
-    if (!out) throw GraphError(path + ": cannot write graph file");
-    out << toJson().dump(2) << "\n";
+    writeTextFileAtomic(path, "graph file", toJson().dump(2) + "\n");
 }
 
 bool RenderGraph::equals(const RenderGraph& other) const { return toJson() == other.toJson(); }

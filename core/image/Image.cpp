@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "core/util/AtomicFile.h"
 #include "core/util/Error.h"
 #include "core/util/Log.h"
 
@@ -21,9 +22,12 @@ float srgbToLinear(float c) {
 float halfToFloat(uint16_t h) {
     uint32_t sign = (h >> 15) & 1, exp = (h >> 10) & 0x1f, mant = h & 0x3ff;
     float v;
-    if (exp == 0) v = std::ldexp(float(mant), -24);
-    else if (exp == 31) v = mant ? NAN : INFINITY;
-    else v = std::ldexp(float(mant | 0x400), int(exp) - 25);
+    if (exp == 0)
+        v = std::ldexp(float(mant), -24);
+    else if (exp == 31)
+        v = mant ? NAN : INFINITY;
+    else
+        v = std::ldexp(float(mant | 0x400), int(exp) - 25);
     return sign ? -v : v;
 }
 
@@ -66,7 +70,8 @@ ImageData readImage(const std::string& path, bool linearize) {
     in->close();
     if (linearize && is8bit)
         for (size_t i = 0; i < img.pixels.size(); ++i)
-            if (img.channels < 4 || i % img.channels != 3) img.pixels[i] = srgbToLinear(img.pixels[i]);
+            if (img.channels < 4 || i % img.channels != 3)
+                img.pixels[i] = srgbToLinear(img.pixels[i]);
     return img;
 }
 
@@ -77,15 +82,21 @@ void readImageSize(const std::string& path, uint32_t& width, uint32_t& height) {
     height = uint32_t(in->spec().height);
 }
 
+void checkImagePath(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    if (ext.empty()) throw UserError(path + ": output file needs an extension (.exr, .png, ...)");
+    if (!OIIO::ImageOutput::create(path))
+        throw UserError(path + ": no image writer for '" + ext + "'");
+    checkWritable(path, "image");
+}
+
 void writeImage(const std::string& path, const ImageData& image) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     bool isFloat = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif";
     if (ext.empty()) throw UserError(path + ": output file needs an extension (.exr, .png, ...)");
-    auto parent = std::filesystem::path(path).parent_path();
-    if (!parent.empty()) std::filesystem::create_directories(parent);
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw UserError(path + ": no image writer for '" + ext + "'");
+    if (!OIIO::ImageOutput::create(path))
+        throw UserError(path + ": no image writer for '" + ext + "'");
     uint32_t channels = image.channels;
     // HDR (RGBE) and JPEG have no alpha channel.
     if ((ext == ".hdr" || ext == ".jpg" || ext == ".jpeg") && channels == 4) channels = 3;
@@ -99,10 +110,29 @@ void writeImage(const std::string& path, const ImageData& image) {
     OIIO::ImageSpec spec(int(image.width), int(image.height), int(channels),
                          isFloat ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (ext == ".exr") spec.set_format(OIIO::TypeDesc::FLOAT);
-    if (!out->open(path, spec)) throw UserError(path + ": cannot open for writing: " + out->geterror());
-    if (!out->write_image(OIIO::TypeDesc::FLOAT, data.data()))
-        throw UserError(path + ": cannot write image: " + out->geterror());
-    out->close();
+    writeFileAtomic(path, "image", [&](const std::string& file) {
+        auto out = OIIO::ImageOutput::create(file);
+        if (!out) throw UserError(path + ": no image writer for '" + ext + "'");
+        if (!out->open(file, spec))
+            throw UserError(path + ": cannot open for writing: " + out->geterror());
+        if (!out->write_image(OIIO::TypeDesc::FLOAT, data.data()))
+            throw UserError(path + ": cannot write image: " + out->geterror());
+        if (!out->close()) throw UserError(path + ": cannot write image: " + out->geterror());
+        // Not every writer reports a short write (a full disk, a file-size limit), so the file
+        // is read back whole before it replaces the target.
+        if (std::filesystem::is_regular_file(file)) {
+            auto in = OIIO::ImageInput::open(file);
+            std::vector<float> back(data.size());
+            bool ok = in && in->spec().width == int(image.width) &&
+                      in->spec().height == int(image.height) &&
+                      in->read_image(0, 0, 0, int(channels), OIIO::TypeDesc::FLOAT, back.data());
+            std::string err = in ? in->geterror() : OIIO::geterror();
+            if (in) in->close();
+            if (!ok)
+                throw UserError(path + ": the written image does not read back (disk full?)" +
+                                (err.empty() ? "" : ": " + err));
+        }
+    });
 }
 
 ImageData downloadImage(gpu::Context& gpu, const gpu::Image& image) {
@@ -110,11 +140,14 @@ ImageData downloadImage(gpu::Context& gpu, const gpu::Image& image) {
     uint32_t n = image.width() * image.height();
     std::vector<uint8_t> raw(image.byteSize());
     gpu.downloadImage(image, raw.data());
-    ImageData out = ImageData::make(image.width(), image.height(), gpu::channelCount(image.format()));
+    ImageData out =
+        ImageData::make(image.width(), image.height(), gpu::channelCount(image.format()));
     switch (image.format()) {
         case Format::RGBA32F:
         case Format::RG32F:
-        case Format::R32F: std::memcpy(out.pixels.data(), raw.data(), raw.size()); break;
+        case Format::R32F:
+            std::memcpy(out.pixels.data(), raw.data(), raw.size());
+            break;
         case Format::RGBA16F: {
             auto* h = reinterpret_cast<const uint16_t*>(raw.data());
             for (size_t i = 0; i < size_t(n) * 4; ++i) out.pixels[i] = halfToFloat(h[i]);
@@ -165,11 +198,15 @@ void uploadImage(gpu::Context& gpu, const gpu::Image& image, const ImageData& da
                     reinterpret_cast<uint32_t*>(raw.data())[p * dstC + c] =
                         uint32_t(std::max(0.0f, v));
                     break;
-                case Format::R32I: reinterpret_cast<int32_t*>(raw.data())[p] = int32_t(v); break;
+                case Format::R32I:
+                    reinterpret_cast<int32_t*>(raw.data())[p] = int32_t(v);
+                    break;
                 case Format::RGBA8:
                     raw[p * 4 + c] = uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
                     break;
-                default: reinterpret_cast<float*>(raw.data())[p * dstC + c] = v; break;
+                default:
+                    reinterpret_cast<float*>(raw.data())[p * dstC + c] = v;
+                    break;
             }
         }
     gpu.uploadImage(image, raw.data());
@@ -177,10 +214,14 @@ void uploadImage(gpu::Context& gpu, const gpu::Image& image, const ImageData& da
 
 const char* metricName(Metric m) {
     switch (m) {
-        case Metric::MSE: return "mse";
-        case Metric::RelMSE: return "relmse";
-        case Metric::RMSE: return "rmse";
-        case Metric::MAPE: return "mape";
+        case Metric::MSE:
+            return "mse";
+        case Metric::RelMSE:
+            return "relmse";
+        case Metric::RMSE:
+            return "rmse";
+        case Metric::MAPE:
+            return "mape";
     }
     return "?";
 }
@@ -198,9 +239,15 @@ double pixelError(Metric m, const float* x, const float* r, uint32_t channels, d
         double d = double(x[c]) - double(r[c]);
         switch (m) {
             case Metric::MSE:
-            case Metric::RMSE: sum += d * d; break;
-            case Metric::RelMSE: sum += d * d / (double(r[c]) * r[c] + eps); break;
-            case Metric::MAPE: sum += std::abs(d) / (std::abs(double(r[c])) + eps); break;
+            case Metric::RMSE:
+                sum += d * d;
+                break;
+            case Metric::RelMSE:
+                sum += d * d / (double(r[c]) * r[c] + eps);
+                break;
+            case Metric::MAPE:
+                sum += std::abs(d) / (std::abs(double(r[c])) + eps);
+                break;
         }
     }
     return sum / n;

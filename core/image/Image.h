@@ -28,6 +28,9 @@ ImageData readImage(const std::string& path, bool linearize = false);
 void readImageSize(const std::string& path, uint32_t& width, uint32_t& height);
 // Writes by extension. Float formats (exr, hdr) store values as they are; 8-bit formats
 // (png, jpg) clamp to [0,1] and quantise (apply ToneMap first for HDR data).
+// Throws UserError when writeImage(path, ...) would fail for the path alone: no extension, no
+// writer for it, or a directory that cannot be written. Checked before a render starts.
+void checkImagePath(const std::string& path);
 void writeImage(const std::string& path, const ImageData& image);
 
 // GPU <-> CPU: converts from/to the image's texel format.

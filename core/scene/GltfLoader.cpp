@@ -326,6 +326,7 @@ private:
                                          "emissiveStrength", 1.0, hasStrength));
         Material m;
         m.name = g.name.empty() ? fmt::format("material{}", index) : g.name;
+        m.origin = fmt::format("{}: materials[{}]", mPath, index);
         m.alpha = rough * rough;
         m.distribution = Microfacet::GGX;
         m.eta = ior > 1.0f ? ior : 1.5f;
@@ -450,6 +451,7 @@ private:
             s.material = material(prim.material);
             if (prim.material >= 0) s.emission = mEmission[prim.material];
             s.toWorld = world;
+            s.origin = fmt::format("{}: node '{}'", mPath, node.name);
             mScene.shapes.push_back(s);
         }
     }
@@ -507,6 +509,7 @@ private:
             addWarning(mScene,
                        fmt::format("{}: light '{}': range is ignored (inverse-square falloff)",
                                    mPath, g.name));
+        l.origin = fmt::format("{}: KHR_lights_punctual lights[{}]", mPath, index);
         mScene.lights.push_back(l);
     }
 };

@@ -98,12 +98,7 @@ public:
                 mSrc.filename() + ": no camera; using a default camera in front of the scene");
             detail::setDefaultCamera(mScene);
         }
-        bool lit = !mScene.lights.empty() ||
-                   std::any_of(mScene.shapes.begin(), mScene.shapes.end(),
-                               [](const Shape& s) { return glm::length(s.emission) > 0.0f; });
-        if (!lit)
-            detail::addWarning(mScene,
-                               mSrc.filename() + ": the scene has no lights or emissive shapes");
+        // A scene that cannot emit light is warned about in detail::validateScene.
     }
 
 private:
@@ -387,6 +382,7 @@ private:
                      type + "'");
         Material m;
         m.name = name;
+        m.origin = mSrc.where(ptr);
         m.type = it->second;
         std::vector<std::string> keys = {"type", "two_sided", "normal_map"};
         bool rough =
@@ -655,6 +651,7 @@ private:
         int mask = integer(j, ptr, "ray_mask", 0xff);
         if (mask < 0 || mask > 0xff) fail(child(ptr, "ray_mask"), "'ray_mask' must be in [0, 255]");
         s.rayMask = uint32_t(mask);
+        s.origin = mSrc.where(ptr);
         mScene.shapes.push_back(s);
     }
 
@@ -763,6 +760,7 @@ private:
                      type + "'");
         }
         if (boolean(j, ptr, "caustic_emitter", false)) l.flags |= kCausticEmitter;
+        l.origin = mSrc.where(ptr);
         mScene.lights.push_back(l);
     }
     void envmap(const json& j, const std::string& ptr, Light& l) {
@@ -790,6 +788,7 @@ private:
             checkKeys(j, ptr, "environment", {"file", "scale", "transform"});
             envmap(j, ptr, l);
         }
+        l.origin = mSrc.where(ptr);
         mScene.lights.push_back(l);
     }
 

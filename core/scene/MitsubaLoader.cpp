@@ -133,6 +133,7 @@ public:
         : mScene(scene), mDefaults(defines) {}
 
     void load(const std::string& path) {
+        mIncludeStack = {fs::weakly_canonical(path).string()};
         XmlFile& file = parseFile(path);
         pugi::xml_node root = file.doc.document_element();
         if (std::string(root.name()) != "scene") fail(root, "expected <scene> as the root element");
@@ -436,9 +437,17 @@ public:
         if (std::string(node.name()) != "bsdf") fail(node, "expected a <bsdf>");
         const void* key = node.internal_object();
         auto it = mBuiltMaterials.find(key);
-        if (it == mBuiltMaterials.end())
-            it = mBuiltMaterials.emplace(key, buildMaterial(node)).first;
-        return it->second;
+        if (it != mBuiltMaterials.end()) return it->second;
+        for (auto& b : mBuilding)
+            if (b == node) {
+                std::string chain;
+                for (auto& c : mBuilding) chain += describe(c) + " -> ";
+                fail(node, "bsdf reference cycle: " + chain + describe(node));
+            }
+        mBuilding.push_back(node);
+        Material m = buildMaterial(node);
+        mBuilding.pop_back();
+        return mBuiltMaterials.emplace(key, std::move(m)).first->second;
     }
     // Index into Scene::materials of a <bsdf> used by a shape (added on first use).
     int materialIndex(pugi::xml_node node) {
@@ -474,6 +483,7 @@ public:
     // Wrappers (twosided, normalmap, ...) copy their nested material; the wrapper's id names it.
     Material buildMaterial(pugi::xml_node node) {
         Material m = buildMaterialOf(node);
+        m.origin = where(node);
         if (node.attribute("id")) m.name = node.attribute("id").value();
         return m;
     }
@@ -805,6 +815,7 @@ public:
         if (p.getBool("caustic_receiver", false)) shape.flags |= kCausticReceiver;
         if (p.getBool("caustic_bouncer", false)) shape.flags |= kCausticBouncer;
         p.reportUnused({});
+        shape.origin = where(node);
         mScene.shapes.push_back(shape);
     }
 
@@ -884,6 +895,7 @@ public:
             return;
         }
         p.reportUnused({"sampling_weight", "gamma", "cache"});
+        light.origin = where(node);
         mScene.lights.push_back(light);
     }
 
@@ -1003,8 +1015,18 @@ public:
                 if (!fs::exists(path))
                     fail(child,
                          fmt::format("included file not found: '{}' (tried '{}')", file, path));
+                std::string canonical = fs::weakly_canonical(path).string();
+                std::string chain;
+                for (auto& f : mIncludeStack) chain += f + " -> ";
+                if (std::find(mIncludeStack.begin(), mIncludeStack.end(), canonical) !=
+                    mIncludeStack.end())
+                    fail(child, "include cycle: " + chain + canonical);
+                if (mIncludeStack.size() >= 32)
+                    fail(child, "includes nested deeper than 32 files");
                 XmlFile& inc = parseFile(path);
+                mIncludeStack.push_back(canonical);
                 processChildren(inc.doc.document_element());
+                mIncludeStack.pop_back();
             } else if (tag == "alias") {
                 mIds[child.attribute("as").value()] = resolveRef(child);
             } else if (tag == "path") {
@@ -1033,7 +1055,9 @@ private:
     std::vector<std::string> mSearchPaths;
     std::map<std::string, std::string> mDefaults;
     std::map<std::string, pugi::xml_node> mIds;
+    std::vector<std::string> mIncludeStack;  // the files being processed, outermost first
     std::map<const void*, Material> mBuiltMaterials;
+    std::vector<pugi::xml_node> mBuilding;  // wrappers being built, to name reference cycles
     std::map<const void*, int> mMaterialCache;
     std::map<std::pair<const void*, bool>, std::pair<int, glm::vec3>> mTextureCache;
     std::map<std::string, int> mMeshCache;
@@ -1058,6 +1082,7 @@ private:
             throw UserError(fmt::format("{}:{}:{}: XML syntax error: {}", path,
                                         file->line(result.offset), file->column(result.offset),
                                         result.description()));
+        checkDepth(*file);
         mSearchPaths.push_back(file->dir);
         mFiles.push_back(std::move(file));
         XmlFile& f = *mFiles.back();
@@ -1078,6 +1103,25 @@ private:
         substitute(root);
         collectIds(root);
         return f;
+    }
+
+    // The loader recurses over elements (substitution, wrappers), so nesting is bounded before
+    // any of it runs; pugixml's own parse and traversal do not recurse.
+    static constexpr int kMaxXmlDepth = 128;
+    static void checkDepth(const XmlFile& file) {
+        struct Walker : pugi::xml_tree_walker {
+            pugi::xml_node tooDeep;
+            bool for_each(pugi::xml_node& n) override {
+                if (depth() < kMaxXmlDepth) return true;
+                tooDeep = n;
+                return false;
+            }
+        } walker;
+        const_cast<pugi::xml_document&>(file.doc).traverse(walker);
+        if (walker.tooDeep)
+            throw UserError(fmt::format("{}:{}: <{}>: XML elements nested deeper than {} levels",
+                                        file.path, file.line(walker.tooDeep.offset_debug()),
+                                        walker.tooDeep.name(), kMaxXmlDepth));
     }
 
     // Mitsuba 0.5/0.6 spell names in camelCase; everything else in the loader uses 2/3 names.

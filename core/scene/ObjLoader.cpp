@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <tuple>
 #include <unordered_map>
 
@@ -20,6 +22,30 @@ namespace loom::scene {
 namespace {
 
 namespace fs = std::filesystem;
+
+// "file.mtl:line" of `newmtl name` in the MTL files the OBJ names (tinyobjloader does not keep
+// where a material came from), else the OBJ path.
+std::string mtlOrigin(const std::string& objPath, const std::string& name) {
+    std::ifstream obj(objPath);
+    std::string line;
+    while (std::getline(obj, line)) {
+        std::istringstream ls(line);
+        std::string tag, file;
+        if (!(ls >> tag) || tag != "mtllib") continue;
+        while (ls >> file) {
+            std::string mtlPath = (fs::path(objPath).parent_path() / file).string();
+            std::ifstream mtl(mtlPath);
+            std::string l;
+            for (int n = 1; std::getline(mtl, l); ++n) {
+                std::istringstream ms(l);
+                std::string t, m;
+                if (ms >> t >> m && t == "newmtl" && m == name)
+                    return mtlPath + ":" + std::to_string(n);
+            }
+        }
+    }
+    return objPath;
+}
 
 tinyobj::ObjReader parseObj(const std::string& path) {
     if (!fs::exists(path)) throw UserError(path + ": OBJ file not found");
@@ -157,6 +183,7 @@ Scene loadObjScene(const std::string& path) {
         std::string ctx = fmt::format("{}: material '{}'", path, t.name);
         Material m;
         m.name = t.name;
+        m.origin = mtlOrigin(path, t.name);
         glm::vec3 kd(t.diffuse[0], t.diffuse[1], t.diffuse[2]);
         glm::vec3 ks(t.specular[0], t.specular[1], t.specular[2]);
         glm::vec3 tf(t.transmittance[0], t.transmittance[1], t.transmittance[2]);
@@ -242,6 +269,7 @@ Scene loadObjScene(const std::string& path) {
             scene.materials.push_back(materials[size_t(mat)]);
             s.material = int(scene.materials.size() - 1);
             s.emission = emission[size_t(mat)];
+            s.origin = materials[size_t(mat)].origin;
         } else {
             if (defaultMaterial < 0) {
                 scene.materials.push_back(Material{});

@@ -49,6 +49,7 @@ enum class Microfacet { GGX, Beckmann };
 
 struct Material {
     std::string name;
+    std::string origin;  // where it was defined ("file:line", "file: key"), for messages
     BsdfType type = BsdfType::Diffuse;
     glm::vec3 reflectance{0.5f};       // diffuse reflectance (Diffuse/Plastic)
     int reflectanceTexture = -1;       // index into Scene::textures
@@ -94,6 +95,7 @@ struct ShapeKeyframe {
 
 struct Shape {
     std::string name;
+    std::string origin;  // where it was defined, for messages
     int mesh = -1;                 // index into Scene::meshes
     int material = -1;             // index into Scene::materials
     glm::mat4 toWorld{1.0f};
@@ -121,6 +123,7 @@ struct Light {
     float scale = 1.0f;
     glm::mat4 toWorld{1.0f};       // environment rotation
     uint32_t flags = 0;            // kCausticEmitter (| kCausticMulti) for SMS-tagged lights
+    std::string origin;            // where it was defined, for messages
 };
 
 struct CameraKeyframe {

@@ -300,6 +300,94 @@ bool namedIor(const std::string& name, float& ior) {
     return false;
 }
 
+namespace {
+
+std::string formatVec(const glm::vec3& v) {
+    return fmt::format("({}, {}, {})", v.x, v.y, v.z);
+}
+
+// The range rules, once for all loaders.
+void checkPhysicalRanges(Scene& scene) {
+    auto at = [&](const std::string& origin, const std::string& what) {
+        return (origin.empty() ? scene.sourceFile : origin) + ": " + what;
+    };
+    auto finite = [](const glm::vec3& v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    };
+    auto nonNegative = [&](const glm::vec3& v, const std::string& where, const char* name) {
+        if (!finite(v))
+            throw UserError(fmt::format("{}: {} {} is not finite", where, name, formatVec(v)));
+        if (v.x < 0.0f || v.y < 0.0f || v.z < 0.0f)
+            throw UserError(fmt::format("{}: {} {} is negative", where, name, formatVec(v)));
+    };
+    auto albedo = [&](const glm::vec3& v, const std::string& where, const char* name) {
+        nonNegative(v, where, name);
+        if (v.x > 1.0f || v.y > 1.0f || v.z > 1.0f)
+            addWarning(scene, fmt::format("{}: {} {} exceeds 1: the surface reflects more light "
+                                          "than it receives",
+                                          where, name, formatVec(v)));
+    };
+    auto number = [&](float x, const std::string& where, const char* name, float lo, bool loOpen) {
+        if (!std::isfinite(x) || x < lo || (loOpen && x == lo))
+            throw UserError(fmt::format("{}: {} = {} must be a finite number {} {}", where, name, x,
+                                        loOpen ? ">" : ">=", lo));
+    };
+    for (const Material& m : scene.materials) {
+        std::string where = at(m.origin, "material '" + m.name + "'");
+        albedo(m.reflectance, where, "reflectance");
+        albedo(m.specularReflectance, where, "specular reflectance");
+        albedo(m.specularTransmittance, where, "specular transmittance");
+        number(m.alpha, where, "roughness alpha", 0.0f, false);
+        number(m.eta, where, "index of refraction", 0.0f, true);
+        nonNegative(m.conductorEta, where, "conductor eta");
+        nonNegative(m.conductorK, where, "conductor k");
+    }
+    bool emits = false;
+    for (const Shape& s : scene.shapes) {
+        nonNegative(s.emission, at(s.origin, "shape '" + s.name + "'"), "emitted radiance");
+        if (s.emission.x + s.emission.y + s.emission.z <= 0.0f) continue;
+        double area = 0.0;
+        const Mesh& mesh = scene.meshes[size_t(s.mesh)];
+        for (const auto& tri : mesh.indices) {
+            glm::vec3 a(s.toWorld * glm::vec4(mesh.positions[tri.x], 1.0f));
+            glm::vec3 b(s.toWorld * glm::vec4(mesh.positions[tri.y], 1.0f));
+            glm::vec3 c(s.toWorld * glm::vec4(mesh.positions[tri.z], 1.0f));
+            area += 0.5 * double(glm::length(glm::cross(b - a, c - a)));
+        }
+        if (area > 0.0)
+            emits = true;
+        else
+            addWarning(scene, at(s.origin, "shape '" + s.name +
+                                               "': an emitter with zero area emits nothing"));
+    }
+    for (const Light& l : scene.lights) {
+        std::string where = at(l.origin, "light");
+        nonNegative(l.intensity, where, "intensity");
+        number(l.scale, where, "scale", 0.0f, false);
+        if (l.type == LightType::Spot &&
+            !(l.cutoffAngle > 0.0f && l.cutoffAngle <= 180.0f && std::isfinite(l.beamWidth)))
+            throw UserError(
+                fmt::format("{}: spot cutoff angle {} must be in (0, 180]", where, l.cutoffAngle));
+        if ((l.type == LightType::Spot || l.type == LightType::Directional) &&
+            !(finite(l.direction) && glm::length(l.direction) > 0.0f))
+            throw UserError(where + ": direction " + formatVec(l.direction) + " is not usable");
+        if (l.intensity.x + l.intensity.y + l.intensity.z > 0.0f && l.scale > 0.0f) emits = true;
+    }
+    auto checkFov = [&](float fov, const std::string& what) {
+        if (!(fov > 0.0f && fov < 180.0f))
+            throw UserError(fmt::format("{}: camera {} = {} degrees must be in (0, 180)",
+                                        scene.sourceFile, what, fov));
+    };
+    checkFov(scene.camera.fov, "fov");
+    for (const CameraKeyframe& k : scene.camera.path) checkFov(k.fovY, "path fov");
+    if (!emits)
+        addWarning(scene, scene.sourceFile +
+                              ": the scene has no emitter that can emit light (no light, or only "
+                              "zero-area or black emitters); lit images will be black");
+}
+
+}  // namespace
+
 void setDefaultCamera(Scene& scene) {
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (const Shape& s : scene.shapes) {
@@ -321,7 +409,7 @@ void setDefaultCamera(Scene& scene) {
     cam.toWorld = lookAtMatrix(center + glm::vec3(0, 0, 3.0f * radius), center, glm::vec3(0, 1, 0));
 }
 
-void validateScene(const Scene& scene) {
+void validateScene(Scene& scene) {
     const std::string& file = scene.sourceFile;
     for (size_t i = 0; i < scene.meshes.size(); ++i)
         validateMesh(scene.meshes[i], fmt::format("{}: mesh '{}'", file, scene.meshes[i].name));
@@ -344,6 +432,7 @@ void validateScene(const Scene& scene) {
     }
     for (const Light& l : scene.lights)
         checkIndex(l.envTexture, scene.textures.size(), "environment texture");
+    checkPhysicalRanges(scene);
 }
 
 }  // namespace detail

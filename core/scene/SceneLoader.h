@@ -51,7 +51,10 @@ bool namedIor(const std::string& name, float& ior);
 // Places a camera in front of the scene's bounding box (used when a file has none).
 void setDefaultCamera(Scene& scene);
 // Validates meshes (indices, finite positions) and shape/material/texture indices.
-void validateScene(const Scene& scene);
+// Then applies the same physical range rules to every format's materials, emitters, lights and
+// camera: non-finite or negative values are errors naming where they were defined; reflectance
+// above 1 and a scene that cannot emit light are warnings.
+void validateScene(Scene& scene);
 
 }  // namespace detail
 }  // namespace loom::scene

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/util/AtomicFile.h"
 #include "core/util/Error.h"
 #include "core/util/Log.h"
 
@@ -86,18 +87,16 @@ CsvTable readCsv(const std::string& path) {
 }
 
 void writeCsv(const std::string& path, const CsvTable& table) {
-    auto parent = std::filesystem::path(path).parent_path();
-    if (!parent.empty()) std::filesystem::create_directories(parent);
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw UserError(path + ": cannot write CSV file");
-    if (table.header.empty()) return;
+    std::string text;
     auto writeRecord = [&](const std::vector<std::string>& rec) {
-        for (size_t i = 0; i < rec.size(); ++i) out << (i ? "," : "") << csvQuote(rec[i]);
-        out << "\n";
+        for (size_t i = 0; i < rec.size(); ++i) text += (i ? "," : "") + csvQuote(rec[i]);
+        text += "\n";
     };
-    writeRecord(table.header);
-    for (auto& row : table.rows) writeRecord(row);
-    if (!out) throw UserError(path + ": error while writing CSV file");
+    if (!table.header.empty()) {
+        writeRecord(table.header);
+        for (auto& row : table.rows) writeRecord(row);
+    }
+    writeTextFileAtomic(path, "CSV file", text);
 }
 
 CsvTable mergeCsv(const std::vector<std::string>& paths) {

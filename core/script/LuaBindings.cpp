@@ -33,6 +33,7 @@
 #include "core/util/Error.h"
 #include "core/util/JsonSource.h"
 #include "core/util/Log.h"
+#include "core/util/AtomicFile.h"
 
 #ifndef LOOM_SOURCE_DIR
 #define LOOM_SOURCE_DIR ""
@@ -233,7 +234,9 @@ std::vector<double> numberArray(lua_State* L, int i, const std::string& fn,
 // Lua <-> JSON. Integers stay integers; arrays are tables with keys 1..n; other tables are
 // objects with string keys; an empty table is an empty object.
 
-json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
+// `ancestors` holds the tables being converted, outermost first: a table met again is a cycle.
+json toJson(lua_State* L, int idx, const std::string& where,
+            std::vector<const void*>& ancestors) {
     idx = lua_absindex(L, idx);
     switch (lua_type(L, idx)) {
         case LUA_TNIL:
@@ -249,7 +252,20 @@ json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
             return std::string(s, n);
         }
         case LUA_TTABLE: {
-            if (depth > 64) throw ScriptError(where + ": tables nested too deeply (a cycle?)");
+            const void* self = lua_topointer(L, idx);
+            if (std::find(ancestors.begin(), ancestors.end(), self) != ancestors.end())
+                throw ScriptError(where + ": the table contains itself (a cycle); JSON cannot "
+                                          "hold it");
+            if (ancestors.size() >= size_t(kMaxJsonDepth))
+                throw ScriptError(
+                    fmt::format("{}: tables nested deeper than {} levels", where, kMaxJsonDepth));
+            // Each level holds a key and a value on the Lua stack.
+            if (!lua_checkstack(L, 4)) throw ScriptError(where + ": Lua stack exhausted");
+            ancestors.push_back(self);
+            struct Pop {
+                std::vector<const void*>& a;
+                ~Pop() { a.pop_back(); }
+            } pop{ancestors};
             size_t count = 0;
             bool allIntegerKeys = true;
             lua_Integer maxKey = 0;
@@ -270,7 +286,7 @@ json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
                 json arr = json::array();
                 for (lua_Integer k = 1; k <= maxKey; ++k) {
                     lua_rawgeti(L, idx, k);
-                    arr.push_back(toJson(L, -1, fmt::format("{}[{}]", where, k), depth + 1));
+                    arr.push_back(toJson(L, -1, fmt::format("{}[{}]", where, k), ancestors));
                     lua_pop(L, 1);
                 }
                 return arr;
@@ -284,7 +300,7 @@ json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
                         "an array (keys 1..n) or an object (string keys)",
                         where, describe(L, -2)));
                 std::string key = lua_tostring(L, -2);
-                obj[key] = toJson(L, -1, where + "." + key, depth + 1);
+                obj[key] = toJson(L, -1, where + "." + key, ancestors);
                 lua_pop(L, 1);
             }
             return obj;
@@ -295,7 +311,14 @@ json toJson(lua_State* L, int idx, const std::string& where, int depth = 0) {
     }
 }
 
+json toJson(lua_State* L, int idx, const std::string& where) {
+    std::vector<const void*> ancestors;
+    return toJson(L, idx, where, ancestors);
+}
+
 void pushJson(lua_State* L, const json& j) {
+    // Arrays and objects hold the table and one value on the stack per level.
+    if (!lua_checkstack(L, 3)) throw ScriptError("JSON too deeply nested for the Lua stack");
     switch (j.type()) {
         case json::value_t::boolean:
             lua_pushboolean(L, j.get<bool>());
@@ -1277,10 +1300,7 @@ int lWriteJson(lua_State* L) {
     const std::string fn = "loom.write_json";
     std::string path = argString(L, 1, fn, "the path");
     json j = toJson(L, 2, fn);
-    makeParentDirs(path);
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw UserError(path + ": cannot write JSON file");
-    out << j.dump(2) << "\n";
+    writeTextFileAtomic(path, "JSON file", j.dump(2) + "\n");
     return 0;
 }
 

@@ -9,6 +9,7 @@
 
 #include "core/util/Error.h"
 #include "core/util/Log.h"
+#include "core/util/AtomicFile.h"
 
 namespace loom::script {
 
@@ -689,11 +690,7 @@ std::pair<std::string, std::string> writePlot(const std::string& path, const Plo
     if (ext == ".svg" || ext == ".png") stem.replace_extension();
     std::string svgPath = stem.string() + ".svg", pngPath = stem.string() + ".png";
     std::string svg = plotSvg(spec);  // validates before anything is written
-    if (stem.has_parent_path()) fs::create_directories(stem.parent_path());
-    std::ofstream out(svgPath, std::ios::binary);
-    if (!out) throw UserError(svgPath + ": cannot write plot");
-    out << svg;
-    out.close();
+    writeTextFileAtomic(svgPath, "plot", svg);
     writeImage(pngPath, plotImage(spec));
     return {svgPath, pngPath};
 }

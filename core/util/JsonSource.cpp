@@ -57,9 +57,12 @@ private:
     static std::string escapePointer(const std::string& key) {
         std::string r;
         for (char c : key) {
-            if (c == '~') r += "~0";
-            else if (c == '/') r += "~1";
-            else r += c;
+            if (c == '~')
+                r += "~0";
+            else if (c == '/')
+                r += "~1";
+            else
+                r += c;
         }
         return r;
     }
@@ -120,11 +123,48 @@ SourceLocation offsetToLocation(const std::string& text, size_t offset) {
 
 }  // namespace
 
+void checkJsonDepth(const std::string& text, const std::string& filename) {
+    int depth = 0;
+    bool inString = false;
+    for (size_t i = 0; i < text.size(); ++i) {
+        char c = text[i];
+        if (inString) {
+            if (c == '\\')
+                ++i;
+            else if (c == '"')
+                inString = false;
+        } else if (c == '"') {
+            inString = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > kMaxJsonDepth) {
+                SourceLocation loc = offsetToLocation(text, i);
+                throw UserError(filename + ":" + std::to_string(loc.line) + ":" +
+                                std::to_string(loc.column) + ": JSON nested deeper than " +
+                                std::to_string(kMaxJsonDepth) + " levels");
+            }
+        } else if (c == ']' || c == '}') {
+            --depth;
+        }
+    }
+}
+
 JsonSource JsonSource::parse(const std::string& text, const std::string& filename) {
     JsonSource src;
     src.mFilename = filename;
+    checkJsonDepth(text, filename);
     try {
         src.mRoot = json::parse(text);
+    } catch (const json::out_of_range& e) {
+        // A number too large for a double (1e400): name it and where it is.
+        std::string msg = e.what();
+        std::string token;
+        if (auto q = msg.find('\''); q != std::string::npos)
+            token = msg.substr(q + 1, msg.rfind('\'') - q - 1);
+        size_t at = token.empty() ? std::string::npos : text.find(token);
+        SourceLocation loc = offsetToLocation(text, at == std::string::npos ? 0 : at);
+        throw UserError(filename + ":" + std::to_string(loc.line) + ":" +
+                        std::to_string(loc.column) +
+                        ": JSON number out of range: " + (token.empty() ? msg : token));
     } catch (const json::parse_error& e) {
         // byte is 1-based and points one past the offending character.
         SourceLocation loc = offsetToLocation(text, e.byte > 0 ? e.byte - 1 : 0);

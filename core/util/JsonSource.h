@@ -14,6 +14,15 @@ struct SourceLocation {
     int column = 0;  // 1-based
 };
 
+// Deepest nesting of arrays and objects any Loom JSON file may have. Graphs and scenes need
+// fewer than 10 levels; the limit keeps recursive code (and the parser's callers) off the end
+// of the stack.
+constexpr int kMaxJsonDepth = 256;
+
+// Throws UserError "file:line:col: JSON nested deeper than 256 levels" when `text` nests
+// deeper than kMaxJsonDepth. Strings are skipped; the text need not be valid JSON.
+void checkJsonDepth(const std::string& text, const std::string& filename);
+
 class JsonSource {
 public:
     // Throws UserError "file:line:col: JSON syntax error: ..." on malformed text.

@@ -115,8 +115,10 @@ TEST(InspectorWidgets, SaveEditedGraphRoundTrips) {
     EXPECT_EQ(back->getParam("tm.exposure"), json(-1.25));
     EXPECT_EQ(back->getParam("tm.operator"), json("reinhard"));
     EXPECT_EQ(back->getParam("pt.maxBounces"), json(3));
-    // An unwritable path is an error message, not an exception.
-    EXPECT_NE(loom::inspector::saveGraphChecked(*g, dir / "missing/dir/x.json"), "");
+    // An unwritable path (under a regular file) is an error message, not an exception, and a
+    // missing directory is created, as for every file Loom writes.
+    EXPECT_NE(loom::inspector::saveGraphChecked(*g, dir / "edited.json/x.json"), "");
+    EXPECT_EQ(loom::inspector::saveGraphChecked(*g, dir / "missing/dir/x.json"), "");
 }
 
 TEST(InspectorWidgets, FileWatcherSeesChanges) {
