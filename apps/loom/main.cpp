@@ -92,8 +92,10 @@ Without --out/--output the first marked output goes to out/<graph name>.png.
 
 const char* kValidateHelp = R"(usage: loom validate GRAPH [GRAPH ...]
 
-Loads each graph, checks passes, parameters, edges, formats, cycles and outputs, and compiles
-it (cull, order, allocate) at 256x256 without a GPU. Prints OK or the first error per file.
+Loads each graph, checks passes, parameters, edges, formats, cycles and outputs, compiles it
+(cull, order, allocate) at 256x256, and compiles every pass's shaders on the default device
+(lavapipe, on the CPU), so a ComputePass whose shader is missing or does not compile fails here.
+Prints OK or the first error per file.
 )";
 
 const char* kPassesHelp = R"(usage: loom passes [--json | --markdown TYPE]
@@ -346,14 +348,26 @@ int cmdValidate(const std::vector<std::string>& args) {
     }
     if (files.empty()) throw UsageError("validate: missing GRAPH (see loom validate --help)");
     int failures = 0;
+    // Shaders compile on the default device (lavapipe runs on the CPU), started on first need.
+    std::shared_ptr<gpu::Context> gpuContext;
+    std::unique_ptr<ShaderCompiler> compiler;
     for (auto& f : files) {
         try {
             auto g = RenderGraph::load(f);
             auto cg = g->compile(256, 256);
+            if (!gpuContext) gpuContext = gpu::Context::create(gpu::Context::Options{});
+            compiler =
+                std::make_unique<ShaderCompiler>(defaultShaderPaths(), gpuContext->cacheDir());
+            compiler->addSearchPath(g->sourceDir());
+            ShaderLibrary shaders(*gpuContext, *compiler);
+            g->compilePasses(shaders, cg.order);
             std::printf("OK %s (%zu passes, %zu culled)\n", f.c_str(), cg.order.size(),
                         cg.culled.size());
         } catch (const UserError& e) {
-            std::fprintf(stderr, "error: %s\n", e.what());
+            // Pass and shader errors name the pass; the file says which graph it is in.
+            std::string msg = e.what();
+            if (msg.find(f) == std::string::npos) msg = f + ": " + msg;
+            std::fprintf(stderr, "error: %s\n", msg.c_str());
             ++failures;
         }
     }

@@ -244,6 +244,12 @@ VkDescriptorSet CommandList::allocateSet(VkDescriptorSetLayout layout) {
 
 void CommandList::dispatch(const ComputePipeline& pipeline, const Bindings& bindings,
                            const PushConstants* push, uint32_t gx, uint32_t gy, uint32_t gz) {
+    const uint32_t* limit = mContext->mMaxWorkGroupCount;
+    if (gx > limit[0] || gy > limit[1] || gz > limit[2])
+        throw UserError(
+            fmt::format("shader '{}': {}x{}x{} workgroups exceed the device's limit of "
+                        "{}x{}x{} (maxComputeWorkGroupCount)",
+                        pipeline.name(), gx, gy, gz, limit[0], limit[1], limit[2]));
     bind(pipeline, bindings, push);
     if (gx && gy && gz) vkCmdDispatch(mCmd, gx, gy, gz);
 }
@@ -334,8 +340,18 @@ void CommandList::bind(const ComputePipeline& pipeline, const Bindings& bindings
 void CommandList::dispatchThreads(const ComputePipeline& pipeline, const Bindings& bindings,
                                   const PushConstants* push, uint32_t w, uint32_t h, uint32_t d) {
     const auto& ls = pipeline.reflection().localSize;
-    dispatch(pipeline, bindings, push, (w + ls[0] - 1) / ls[0], (h + ls[1] - 1) / ls[1],
-             (d + ls[2] - 1) / ls[2]);
+    // In 64 bits: near 2^32 threads the rounded-up group count would wrap to a small one.
+    uint64_t groups[3] = {(uint64_t(w) + ls[0] - 1) / ls[0], (uint64_t(h) + ls[1] - 1) / ls[1],
+                          (uint64_t(d) + ls[2] - 1) / ls[2]};
+    const uint32_t* limit = mContext->mMaxWorkGroupCount;
+    if (groups[0] > limit[0] || groups[1] > limit[1] || groups[2] > limit[2])
+        throw UserError(fmt::format(
+            "shader '{}': {}x{}x{} threads need {}x{}x{} workgroups of {}x{}x{}, more than the "
+            "device's limit of {}x{}x{} (maxComputeWorkGroupCount)",
+            pipeline.name(), w, h, d, groups[0], groups[1], groups[2], ls[0], ls[1], ls[2],
+            limit[0], limit[1], limit[2]));
+    dispatch(pipeline, bindings, push, uint32_t(groups[0]), uint32_t(groups[1]),
+             uint32_t(groups[2]));
 }
 
 void CommandList::barrier() {
@@ -550,6 +566,8 @@ void Context::init(const Options& options) {
     VkPhysicalDeviceProperties props;
     vkGetPhysicalDeviceProperties(mPhysical, &props);
     mTimestampPeriod = props.limits.timestampPeriod;
+    for (int i = 0; i < 3; ++i) mMaxWorkGroupCount[i] = props.limits.maxComputeWorkGroupCount[i];
+    mMaxImageDimension2D = props.limits.maxImageDimension2D;
     vkGetPhysicalDeviceMemoryProperties(mPhysical, &mMemoryProps);
 
     // Persisted VkPipelineCache, keyed by the device's pipeline-cache UUID: lavapipe compiles
@@ -609,6 +627,16 @@ void Context::savePipelineCache() {
     fs::rename(tmp, mPipelineCachePath, ec);
 }
 
+void Context::checkMemory(VkResult r, const char* call, const std::string& name,
+                          VkDeviceSize bytes) const {
+    // Running out is a request too large for this device (an input error), not a Loom bug.
+    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+        throw UserError(fmt::format("'{}': out of {} memory for {:.1f} MiB on {} ({})", name,
+                                    r == VK_ERROR_OUT_OF_DEVICE_MEMORY ? "device" : "host",
+                                    double(bytes) / (1024.0 * 1024.0), mInfo.name, call));
+    check(r, call);
+}
+
 uint32_t Context::findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags props) const {
     for (uint32_t i = 0; i < mMemoryProps.memoryTypeCount; ++i)
         if ((typeBits & (1u << i)) && (mMemoryProps.memoryTypes[i].propertyFlags & props) == props)
@@ -616,12 +644,14 @@ uint32_t Context::findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags props)
     throw GpuError("no suitable Vulkan memory type");
 }
 
-VkDeviceMemory Context::allocate(VkMemoryRequirements req, VkMemoryPropertyFlags props) {
+VkDeviceMemory Context::allocate(VkMemoryRequirements req, VkMemoryPropertyFlags props,
+                                 const std::string& name) {
     VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = req.size;
     ai.memoryTypeIndex = findMemoryType(req.memoryTypeBits, props);
     VkDeviceMemory mem;
-    check(vkAllocateMemory(mDevice, &ai, nullptr, &mem), "vkAllocateMemory (out of memory?)");
+    checkMemory(vkAllocateMemory(mDevice, &ai, nullptr, &mem), "vkAllocateMemory", name,
+                req.size);
     return mem;
 }
 
@@ -642,8 +672,9 @@ std::shared_ptr<Buffer> Context::createBuffer(VkDeviceSize size, const std::stri
     VkMemoryPropertyFlags props =
         hostVisible ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
                     : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
-    buf->mMemory = allocate(req, props);
-    check(vkBindBufferMemory(mDevice, buf->mBuffer, buf->mMemory, 0), "vkBindBufferMemory");
+    buf->mMemory = allocate(req, props, name);
+    checkMemory(vkBindBufferMemory(mDevice, buf->mBuffer, buf->mMemory, 0), "vkBindBufferMemory",
+                name, req.size);
     if (hostVisible)
         check(vkMapMemory(mDevice, buf->mMemory, 0, VK_WHOLE_SIZE, 0, &buf->mMapped),
               "vkMapMemory");
@@ -654,6 +685,11 @@ std::shared_ptr<Image> Context::createImage(uint32_t width, uint32_t height, For
                                             const std::string& name, VkImageUsageFlags extraUsage) {
     if (width == 0 || height == 0)
         throw GpuError(fmt::format("image '{}' has zero size {}x{}", name, width, height));
+    if (width > mMaxImageDimension2D || height > mMaxImageDimension2D)
+        throw UserError(
+            fmt::format("image '{}' of {}x{} exceeds the device's largest 2D image "
+                        "({} texels per side)",
+                        name, width, height, mMaxImageDimension2D));
     auto img = std::shared_ptr<Image>(new Image());
     img->mDevice = mDevice;
     img->mWidth = width;
@@ -674,8 +710,9 @@ std::shared_ptr<Image> Context::createImage(uint32_t width, uint32_t height, For
     check(vkCreateImage(mDevice, &ici, nullptr, &img->mImage), "vkCreateImage");
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(mDevice, img->mImage, &req);
-    img->mMemory = allocate(req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    check(vkBindImageMemory(mDevice, img->mImage, img->mMemory, 0), "vkBindImageMemory");
+    img->mMemory = allocate(req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, name);
+    checkMemory(vkBindImageMemory(mDevice, img->mImage, img->mMemory, 0), "vkBindImageMemory",
+                name, req.size);
     VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     vci.image = img->mImage;
     vci.viewType = VK_IMAGE_VIEW_TYPE_2D;

@@ -225,7 +225,11 @@ private:
     Context() = default;
     void init(const Options& options);
     uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags props) const;
-    VkDeviceMemory allocate(VkMemoryRequirements req, VkMemoryPropertyFlags props);
+    // Out of memory is a UserError naming `name` and the size.
+    void checkMemory(VkResult r, const char* call, const std::string& name,
+                     VkDeviceSize bytes) const;
+    VkDeviceMemory allocate(VkMemoryRequirements req, VkMemoryPropertyFlags props,
+                            const std::string& name);
     friend class CommandList;
     static VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(
         VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT types,
@@ -241,6 +245,8 @@ private:
     VkPipelineCache mPipelineCache = VK_NULL_HANDLE;
     VkPhysicalDeviceMemoryProperties mMemoryProps{};
     double mTimestampPeriod = 1.0;
+    uint32_t mMaxWorkGroupCount[3] = {65535, 65535, 65535};
+    uint32_t mMaxImageDimension2D = 16384;
     bool mTimestampsSupported = true;
     DeviceInfo mInfo;
     std::string mCacheDir;

@@ -8,9 +8,9 @@
 #include <sstream>
 
 #include "core/graph/CompileStages.h"
+#include "core/util/AtomicFile.h"
 #include "core/util/Hash.h"
 #include "core/util/Log.h"
-#include "core/util/AtomicFile.h"
 
 namespace loom {
 
@@ -193,8 +193,9 @@ std::unique_ptr<RenderGraph> RenderGraph::parse(const std::string& text,
             std::string ptr = "/edges/" + std::to_string(i);
             const json& e = edges[i];
             if (!e.is_array() || e.size() != 2 || !e[0].is_string() || !e[1].is_string())
-                throw fail(ptr, "an edge is [\"src.port\", \"dst.port\"] (or [\"src\", \"dst\"] "
-                                "for an execution-only dependency)");
+                throw fail(ptr,
+                           "an edge is [\"src.port\", \"dst.port\"] (or [\"src\", \"dst\"] "
+                           "for an execution-only dependency)");
             auto [s, sp] = splitPort(e[0]);
             auto [d, dp] = splitPort(e[1]);
             if (sp.empty() != dp.empty())
@@ -244,7 +245,9 @@ void RenderGraph::save(const std::string& path) const {
     writeTextFileAtomic(path, "graph file", toJson().dump(2) + "\n");
 }
 
-bool RenderGraph::equals(const RenderGraph& other) const { return toJson() == other.toJson(); }
+bool RenderGraph::equals(const RenderGraph& other) const {
+    return toJson() == other.toJson();
+}
 
 // ---------------------------------------------------------------------------------------------
 // Editing
@@ -269,8 +272,8 @@ Pass& RenderGraph::addPass(const std::string& type, const std::string& name, con
 }
 
 void RenderGraph::removePass(const std::string& name) {
-    auto it = std::find_if(mPasses.begin(), mPasses.end(),
-                           [&](auto& p) { return p->name() == name; });
+    auto it =
+        std::find_if(mPasses.begin(), mPasses.end(), [&](auto& p) { return p->name() == name; });
     if (it == mPasses.end()) throw GraphError("no pass named '" + name + "'");
     mPasses.erase(it);
     std::erase_if(mEdges, [&](auto& e) { return e.src == name || e.dst == name; });
@@ -397,8 +400,8 @@ std::string RenderGraph::toGraphviz() const {
         if (e.isExecutionOnly())
             s += fmt::format("  \"{}\" -> \"{}\" [style=dashed];\n", e.src, e.dst);
         else
-            s += fmt::format("  \"{}\" -> \"{}\" [label=\"{} -> {}\"];\n", e.src, e.dst,
-                             e.srcPort, e.dstPort);
+            s += fmt::format("  \"{}\" -> \"{}\" [label=\"{} -> {}\"];\n", e.src, e.dst, e.srcPort,
+                             e.dstPort);
     }
     for (auto& o : mOutputs)
         s += fmt::format("  \"out:{}\" [shape=ellipse];\n  \"{}\" -> \"out:{}\";\n", o,
@@ -426,17 +429,27 @@ void RenderGraph::allocate(gpu::Context& gpu) {
     mFreshHistory.clear();
     for (const auto& r : cg.resources) {
         if (mPhysical[r.physical]) continue;
-        if (r.kind == ResourceKind::Texture) {
-            auto img = gpu.createImage(r.width, r.height, r.format, r.name);
-            mPhysical[r.physical] = img;
-            if (r.persistent) mPersistentTextures[r.name] = img;
-        } else {
-            auto buf = gpu.createBuffer(r.bytes, r.name);
-            auto cmd = gpu.beginCommands();
-            cmd->fillBuffer(*buf, 0);
-            gpu.submit(*cmd);
-            mPhysical[r.physical] = buf;
-            if (r.persistent) mPersistentBuffers[r.name] = buf;
+        // Device limits and out-of-memory name the resource (pass.port) and its size.
+        try {
+            if (r.kind == ResourceKind::Texture) {
+                auto img = gpu.createImage(r.width, r.height, r.format, r.name);
+                mPhysical[r.physical] = img;
+                if (r.persistent) mPersistentTextures[r.name] = img;
+            } else {
+                auto buf = gpu.createBuffer(r.bytes, r.name);
+                auto cmd = gpu.beginCommands();
+                cmd->fillBuffer(*buf, 0);
+                gpu.submit(*cmd);
+                mPhysical[r.physical] = buf;
+                if (r.persistent) mPersistentBuffers[r.name] = buf;
+            }
+        } catch (const UserError& e) {
+            std::string size =
+                r.kind == ResourceKind::Texture
+                    ? fmt::format("{}x{} {}", r.width, r.height, gpu::formatName(r.format))
+                    : fmt::format("{} bytes", r.bytes);
+            throw UserError(
+                fmt::format("graph '{}': resource {} ({}): {}", mName, r.name, size, e.what()));
         }
     }
     resetHistory();
@@ -454,6 +467,18 @@ void RenderGraph::resetHistory() {
             mFreshHistory.insert(splitPort(key).first);
 }
 
+void RenderGraph::compilePasses(ShaderLibrary& shaders, const std::vector<int>& order) {
+    for (int pi : order) {
+        try {
+            mPasses[pi]->compile(shaders);
+        } catch (const UserError& e) {
+            throw UserError(fmt::format("pass '{}' ({}): {}", mPasses[pi]->name(),
+                                        mPasses[pi]->type(), e.what()));
+        }
+    }
+    mPassesCompiled = true;
+}
+
 void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t width,
                           uint32_t height, const FrameInputs& frame) {
     if (mCompiled && (mCompiled->width != width || mCompiled->height != height))
@@ -465,17 +490,7 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
         allocate(gpu);
         ++mCompileGeneration;
     }
-    if (!mPassesCompiled) {
-        for (int pi : mCompiled->order) {
-            try {
-                mPasses[pi]->compile(shaders);
-            } catch (const UserError& e) {
-                throw UserError(fmt::format("pass '{}' ({}): {}", mPasses[pi]->name(),
-                                            mPasses[pi]->type(), e.what()));
-            }
-        }
-        mPassesCompiled = true;
-    }
+    if (!mPassesCompiled) compilePasses(shaders, mCompiled->order);
 
     const auto& cg = *mCompiled;
     auto cmd = gpu.beginCommands();
@@ -510,7 +525,10 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
             }
         ancestors[pass.name()] = anc;
         Hasher h;
-        h.add(mCompileGeneration).add(frame.externalRevision).add(uint64_t(width)).add(uint64_t(height));
+        h.add(mCompileGeneration)
+            .add(frame.externalRevision)
+            .add(uint64_t(width))
+            .add(uint64_t(height));
         for (int a : anc) h.add(uint64_t(a)).add(mPasses[a]->revision());
 
         ExecuteContext ctx;

@@ -182,6 +182,10 @@ public:
     // Stages (core/graph/CompileStages.h): validate -> cull -> order -> createResources ->
     // feedback -> alias. Pure CPU; throws GraphError.
     CompiledGraph compile(uint32_t width, uint32_t height) const;
+    // Compiles the shaders of the passes at `order` (indices into passes()), which checks each
+    // ComputePass declaration against its shader; errors name the pass. execute() calls it,
+    // and loom validate, so that a graph that validates also compiles.
+    void compilePasses(ShaderLibrary& shaders, const std::vector<int>& order);
     void validate() const;
     // The graph as the compile stages see it (declarations, edges, outputs, locations).
     stages::GraphModel model() const;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -140,7 +141,10 @@ private:
         const json* v = find(j, key);
         if (!v) return def;
         if (!v->is_number_integer()) fail(child(ptr, key), "'" + key + "' must be an integer");
-        return v->get<int>();
+        int64_t x = v->get<int64_t>();
+        if (x < std::numeric_limits<int>::min() || x > std::numeric_limits<int>::max())
+            fail(child(ptr, key), fmt::format("'{}' = {} does not fit a 32-bit integer", key, x));
+        return int(x);
     }
     bool boolean(const json& j, const std::string& ptr, const std::string& key, bool def) const {
         const json* v = find(j, key);
@@ -582,7 +586,11 @@ private:
             mScene.meshes.back().name = s.name;
         } else if (type == "grass") {
             GrassParams g;
-            g.blades = uint32_t(std::clamp(integer(j, ptr, "blades", 500), 1, 1000000));
+            int blades = integer(j, ptr, "blades", 500);
+            if (blades < 1 || blades > 1000000)
+                fail(child(ptr, "blades"),
+                     fmt::format("'blades' = {} must be in [1, 1000000]", blades));
+            g.blades = uint32_t(blades);
             g.seed = uint32_t(integer(j, ptr, "seed", 1));
             if (find(j, "height")) {
                 std::vector<float> h = numbers(j["height"], child(ptr, "height"), 2, "height");

@@ -234,10 +234,12 @@ public:
         } else if (name == "dispatch") {
             bool ok = v.is_string() || (v.is_array() && v.size() >= 1 && v.size() <= 3 &&
                                         std::all_of(v.begin(), v.end(), [](auto& x) {
-                                            return x.is_number_unsigned() && x > 0;
+                                            return x.is_number_unsigned() && x > 0 &&
+                                                   x <= 0xffffffffu;
                                         }));
             if (!ok)
-                throw ParamError("'dispatch' must be \"frame\", an output port name, or [x, y, z]");
+                throw ParamError("'dispatch' must be \"frame\", an output port name, or [x, y, z] "
+                                 "with each count in 1..4294967295");
         }
         // Port names must be unique across inputs, outputs and persistent resources.
         std::set<std::string> seen;
