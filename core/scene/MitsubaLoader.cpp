@@ -1309,8 +1309,9 @@ float Props::getIor(const std::string& name, float def) {
 void Props::reportUnused(std::initializer_list<const char*> quiet) {
     for (auto& [name, node] : mNamed) {
         if (mUsed.count(name)) continue;
+        const std::string& key = name;  // clang 14 cannot capture a structured binding
         bool isQuiet = std::find_if(quiet.begin(), quiet.end(),
-                                    [&](const char* q) { return name == q; }) != quiet.end();
+                                    [&](const char* q) { return key == q; }) != quiet.end();
         if (isQuiet)
             mLoader.debug(node, "not used by Loom");
         else
