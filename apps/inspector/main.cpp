@@ -32,6 +32,9 @@ per-pass GPU timings, camera controls, hot reload of shaders and of GRAPH, JSON 
   --device D              device index or name (default: LOOM_DEVICE, else lavapipe)
   --validation            enable Vulkan validation layers
 
+LOOM_GPU_TIMEOUT=S (default 600, 0 = forever): a frame still running after S seconds ends the
+inspector with code 2, naming the pass (a shader that never terminates, e.g. after hot reload).
+
 Keys: Space pause, N single step, R reset accumulation, Esc quit.
 Without a display, run under a virtual one: xvfb-run -a loom-inspector ...
 )";
@@ -108,6 +111,7 @@ int main(int argc, char** argv) {
             return 0;
         }
     try {
+        cli::setGpuTimeout(cli::defaultGpuTimeout(), "loom-inspector: ");
         inspector::InspectorApp app(parseArgs(args));
         return app.run();
     } catch (const UserError& e) {

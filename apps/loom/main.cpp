@@ -4,6 +4,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -85,6 +86,9 @@ const char* kRenderHelp = R"(usage: loom render GRAPH [options]
                             warm-up frame excluded when there are several), then the
                             memory of every graph resource (kind, size, lifetime, aliasing)
   --validation              enable Vulkan validation layers
+  --gpu-timeout S           GPU watchdog: a frame that has not finished after S seconds
+                            (default 600, or LOOM_GPU_TIMEOUT; 0 = wait forever) ends the
+                            run with exit code 2, naming the pass that was running
   --quiet                   print only errors
 
 Without --out/--output the first marked output goes to out/<graph name>.png.
@@ -122,6 +126,7 @@ Everything after SCRIPT goes to the script: loom.args holds it, and NAME=VALUE o
   --shard I/N   (anywhere) run only the values I, I+N, I+2N, ... (0 <= I < N) of every
                 loom.sweep; join the shards' CSV files with 'loom merge'
   --quiet       (before SCRIPT) print only errors
+  --gpu-timeout S  (before SCRIPT) GPU watchdog per submit, as for loom render
 
 A Lua error prints script:line, the message and a traceback, and exits 2.
 Example: loom run scripts/equal_time.lua width=64 height=64 budget_ms=400
@@ -197,6 +202,8 @@ int cmdRender(const std::vector<std::string>& args) {
             timings = true;
         else if (a == "--validation")
             o.validation = true;
+        else if (a == "--gpu-timeout")
+            cli::setGpuTimeout(cli::parseSeconds(a, next()));
         else if (a == "--quiet")
             setLogLevel(LogLevel::Error);
         else if (a.rfind("--", 0) == 0)
@@ -301,6 +308,9 @@ int cmdRun(const std::vector<std::string>& args) {
             return 0;
         } else if (a == "--quiet") {
             setLogLevel(LogLevel::Error);
+        } else if (a == "--gpu-timeout") {
+            if (i + 1 >= args.size()) throw UsageError("--gpu-timeout needs a value");
+            cli::setGpuTimeout(cli::parseSeconds(a, args[++i]));
         } else if (a.rfind("--", 0) == 0) {
             throw UsageError("run: unknown option '" + a + "' (see loom run --help)");
         } else {
@@ -525,6 +535,7 @@ int main(int argc, char** argv) {
     std::string cmd = args[0];
     args.erase(args.begin());
     try {
+        cli::setGpuTimeout(cli::defaultGpuTimeout());
         if (cmd == "render") return cmdRender(args);
         if (cmd == "validate") return cmdValidate(args);
         if (cmd == "passes") return cmdPasses(args);

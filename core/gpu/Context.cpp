@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -209,6 +210,7 @@ PushConstants& PushConstants::setInts(const std::string& name, const int32_t* v,
 // Command list
 
 CommandList::~CommandList() {
+    if (mContext->mHung) return;  // possibly still executing (see Watchdog)
     VkDevice dev = mContext->mDevice;
     for (auto pool : mPools) vkDestroyDescriptorPool(dev, pool, nullptr);
     if (mQueries) vkDestroyQueryPool(dev, mQueries, nullptr);
@@ -396,7 +398,16 @@ void CommandList::copyBuffer(const Buffer& src, const Buffer& dst, VkDeviceSize 
     vkCmdCopyBuffer(mCmd, src.handle(), dst.handle(), 1, &region);
 }
 
-uint32_t CommandList::timestamp() {
+uint32_t CommandList::timestamp(std::string label) {
+    if (!label.empty()) {
+        if (!mProgress) {
+            mProgress = mContext->createBuffer(4 * kMaxStamps, "watchdog progress", true);
+            std::memset(mProgress->mapped(), 0, 4 * kMaxStamps);
+        }
+        if (mLabels.size() < kMaxStamps)
+            vkCmdFillBuffer(mCmd, mProgress->handle(), 4 * mLabels.size(), 4, 1u);
+    }
+    mLabels.push_back(std::move(label));
     if (!mContext->mTimestampsSupported) return mQueryCount++;
     if (mQueryCount >= mQueryCapacity) throw GpuError("too many timestamps in one command list");
     vkCmdWriteTimestamp(mCmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mQueries, mQueryCount);
@@ -592,6 +603,15 @@ void Context::init(const Options& options) {
 }
 
 Context::~Context() {
+    if (mWatchdogThread.joinable()) {
+        {
+            std::lock_guard<std::mutex> lock(mWatchdogMutex);
+            mWatchdogStop = true;
+            mWatchdogWake.notify_all();
+        }
+        mWatchdogThread.join();
+    }
+    if (mHung) return;  // the device may still run the timed-out work: leak instead of hanging
     if (mDevice) {
         vkDeviceWaitIdle(mDevice);
         try {
@@ -826,7 +846,61 @@ std::unique_ptr<CommandList> Context::beginCommands() {
     return list;
 }
 
+namespace {
+Watchdog& watchdogState() {
+    static Watchdog w;
+    return w;
+}
+}  // namespace
+
+void Context::setWatchdog(Watchdog watchdog) { watchdogState() = std::move(watchdog); }
+const Watchdog& Context::watchdog() { return watchdogState(); }
+
+std::string Context::describeHang(const CommandList& list) const {
+    const Watchdog& dog = watchdog();
+    std::string running;
+    if (list.mProgress) {
+        const volatile uint32_t* done = static_cast<const uint32_t*>(list.mProgress->mapped());
+        for (size_t i = 0; i < list.mLabels.size() && i < CommandList::kMaxStamps; ++i) {
+            if (list.mLabels[i].empty() || done[i] != 0u) continue;
+            running = list.mLabels[i] + " was running";
+            break;
+        }
+    }
+    if (running.empty())
+        for (const auto& l : list.mLabels)
+            if (!l.empty()) running += (running.empty() ? "one of " : ", ") + l;
+    return fmt::format(
+        "GPU watchdog: the device did not finish within {} s{}: a shader that never "
+        "terminates, or a frame too large for the timeout (loom render --gpu-timeout S, or "
+        "LOOM_GPU_TIMEOUT; 0 waits forever)",
+        dog.seconds, running.empty() ? "" : " (" + running + ")");
+}
+
+void Context::watchdogLoop() {
+    std::unique_lock<std::mutex> lock(mWatchdogMutex);
+    while (!mWatchdogStop) {
+        if (!mWatchedList) {
+            mWatchdogWake.wait(lock);
+            continue;
+        }
+        const uint64_t submit = mWatchedSubmit;
+        const Watchdog& dog = watchdog();
+        auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration<double>(std::min(dog.seconds, 1e9));
+        mWatchdogWake.wait_until(lock, deadline, [&] {
+            return mWatchdogStop || !mWatchedList || mWatchedSubmit != submit;
+        });
+        if (mWatchdogStop || !mWatchedList || mWatchedSubmit != submit) continue;
+        mHung = true;
+        std::string msg = describeHang(*mWatchedList);
+        if (dog.onHang) dog.onHang(msg);  // ends the process
+        mWatchedList = nullptr;
+    }
+}
+
 void Context::submit(CommandList& list) {
+    if (mHung) throw GpuHang("the device is still running work that timed out earlier");
     check(vkEndCommandBuffer(list.mCmd), "vkEndCommandBuffer");
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
@@ -834,8 +908,30 @@ void Context::submit(CommandList& list) {
     VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VkFence fence;
     check(vkCreateFence(mDevice, &fci, nullptr, &fence), "vkCreateFence");
+    const Watchdog& dog = watchdog();
+    const bool watched = dog.seconds > 0 && dog.onHang;
+    if (watched) {
+        std::lock_guard<std::mutex> lock(mWatchdogMutex);
+        if (!mWatchdogThread.joinable()) mWatchdogThread = std::thread([this] { watchdogLoop(); });
+        mWatchedList = &list;
+        ++mWatchedSubmit;
+        mWatchdogWake.notify_all();
+    }
     VkResult r = vkQueueSubmit(mQueue, 1, &si, fence);
-    if (r == VK_SUCCESS) r = vkWaitForFences(mDevice, 1, &fence, VK_TRUE, UINT64_MAX);
+    const uint64_t timeoutNs =
+        dog.seconds > 0 ? uint64_t(std::min(dog.seconds, 1e9) * 1e9) : UINT64_MAX;
+    if (r == VK_SUCCESS) r = vkWaitForFences(mDevice, 1, &fence, VK_TRUE, timeoutNs);
+    if (watched) {
+        std::lock_guard<std::mutex> lock(mWatchdogMutex);
+        mWatchedList = nullptr;
+        mWatchdogWake.notify_all();
+    }
+    if (r == VK_TIMEOUT) {
+        mHung = true;  // never wait on, or free, what the device may still be using
+        std::string msg = describeHang(list);
+        if (dog.onHang) dog.onHang(msg);
+        throw GpuHang(msg);
+    }
     vkDestroyFence(mDevice, fence, nullptr);
     check(r, "vkQueueSubmit/vkWaitForFences (device lost?)");
     list.mTimestampsNs.assign(list.mQueryCount, 0.0);

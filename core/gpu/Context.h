@@ -3,11 +3,15 @@
 // compute pipelines bound by reflected name, command recording, timestamps, readback.
 #include <vulkan/vulkan.h>
 
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <variant>
 #include <vector>
 
@@ -147,8 +151,9 @@ public:
     void fillBuffer(const Buffer& buffer, uint32_t value = 0);
     void copyImage(const Image& src, const Image& dst);
     void copyBuffer(const Buffer& src, const Buffer& dst, VkDeviceSize bytes);
-    // Returns the timestamp slot index; resolved after Context::submit.
-    uint32_t timestamp();
+    // Returns the timestamp slot index; resolved after Context::submit. The label names the
+    // work that ends at this stamp: the watchdog reports the first label not yet reached.
+    uint32_t timestamp(std::string label = {});
     // Nanoseconds for each timestamp() slot; valid after submit.
     const std::vector<double>& timestampsNs() const { return mTimestampsNs; }
     // Keep a resource alive until the list completes.
@@ -156,6 +161,7 @@ public:
 
 private:
     friend class Context;
+    static constexpr uint32_t kMaxStamps = 512;
     Context* mContext = nullptr;
     VkCommandBuffer mCmd = VK_NULL_HANDLE;
     std::vector<VkDescriptorPool> mPools;
@@ -163,14 +169,31 @@ private:
     uint32_t mQueryCount = 0;
     uint32_t mQueryCapacity = 0;
     std::vector<double> mTimestampsNs;
+    // Labelled stamps also write 1 to their slot of a host-visible buffer: the watchdog reads
+    // it while the work runs, with no Vulkan call (lavapipe blocks query reads meanwhile).
+    std::vector<std::string> mLabels;
+    std::shared_ptr<Buffer> mProgress;
     std::vector<std::shared_ptr<void>> mRetained;
     VkDescriptorSet allocateSet(VkDescriptorSetLayout layout);
     // Descriptor set, pipeline and push constants of a dispatch.
     void bind(const ComputePipeline& pipeline, const Bindings& bindings, const PushConstants* push);
 };
 
+// The GPU watchdog: a submit that has not finished after `seconds` (0 = wait forever) is a hang.
+// The device cannot be used after one (the work may still be running), so onHang, given the
+// message, ends the process; it is called from a watchdog thread, because some drivers
+// (lavapipe) execute inside vkQueueSubmit. Without a handler only the fence wait is bounded:
+// submit throws GpuHang and the context skips every further wait.
+struct Watchdog {
+    double seconds = 0.0;
+    std::function<void(const std::string& message)> onHang;
+};
+
 class Context {
 public:
+    // Process-wide: every context's submits use it.
+    static void setWatchdog(Watchdog watchdog);
+    static const Watchdog& watchdog();
     struct Options {
         std::string device;       // "" = default (LOOM_DEVICE, else lavapipe, else first device)
         bool validation = false;  // also enabled by LOOM_VALIDATION=1
@@ -252,6 +275,17 @@ private:
     std::string mCacheDir;
     std::string mPipelineCachePath;
     uint32_t mValidationErrors = 0;
+    std::atomic<bool> mHung{false};  // a submit timed out: the device may still be running it
+    // "pass 'x' (Type) was running": the first labelled stamp of `list` not yet written.
+    std::string describeHang(const CommandList& list) const;
+    // The watchdog thread, started at the first submit that needs it.
+    std::thread mWatchdogThread;
+    std::mutex mWatchdogMutex;
+    std::condition_variable mWatchdogWake;
+    const CommandList* mWatchedList = nullptr;  // armed while a submit runs
+    uint64_t mWatchedSubmit = 0;
+    bool mWatchdogStop = false;
+    void watchdogLoop();
 };
 
 // Default on-disk cache directory: $LOOM_CACHE_DIR, else $XDG_CACHE_HOME/loom, else

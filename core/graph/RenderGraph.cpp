@@ -513,7 +513,7 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
         return any;
     };
     std::vector<uint32_t> stamps;
-    stamps.push_back(cmd->timestamp());
+    stamps.push_back(cmd->timestamp("the frame's first commands"));
     std::map<std::string, std::set<int>> ancestors;  // for the upstream-change hash
     for (size_t pos = 0; pos < cg.order.size(); ++pos) {
         const int pi = cg.order[pos];
@@ -571,7 +571,7 @@ void RenderGraph::execute(gpu::Context& gpu, ShaderLibrary& shaders, uint32_t wi
         cmd->barrier();
         // The in-place writer that follows must not overwrite the value before it is copied.
         if (copyHistory(int(pos))) cmd->barrier();
-        stamps.push_back(cmd->timestamp());
+        stamps.push_back(cmd->timestamp(fmt::format("pass '{}' ({})", pass.name(), pass.type())));
     }
     copyHistory(int(cg.order.size()));
     gpu.submit(*cmd);

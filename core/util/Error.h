@@ -17,4 +17,11 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// A GPU submit outlived the watchdog's timeout (gpu::Watchdog): a shader that does not
+// terminate, or a frame larger than the timeout allows. The message names the pass.
+class GpuHang : public UserError {
+public:
+    using UserError::UserError;
+};
+
 }  // namespace loom

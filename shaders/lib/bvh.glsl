@@ -105,6 +105,10 @@ uint bvh_xor_permute(uint x, uint f) {
     return x;
 }
 
+#ifndef BVH_MAX_VISITS
+#define BVH_MAX_VISITS (1u << 24)
+#endif
+
 bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_hit,
                   out Hit hit) {
     hit.t = tmax;
@@ -132,7 +136,9 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
 #ifdef BVH_STATS
     bvh_stat_nodes = 0u, bvh_stat_tris = 0u, bvh_stat_tri_iters = 0u;
 #endif
-    while (true) {
+    // A well-formed tree visits each node at most once; the cap only ends the loop on a corrupt
+    // node buffer (a cycle), so that no ray runs forever (the GPU watchdog's loop bound).
+    for (uint visits = 0u; visits < BVH_MAX_VISITS; ++visits) {
         bvh_iterations++;
 #ifdef BVH_STATS
         bvh_stat_nodes++;

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <chrono>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -217,6 +219,47 @@ TEST(BadInput, ComputePassDispatchesWithinTheDeviceLimits) {
               "void main() { int x = ; }\n");
     graph("syntax.json", "syntax.comp", "");
     expectNamedError(runLoom(d, "validate syntax.json"), {"syntax.json", "syntax.comp:3"});
+}
+
+// The GPU watchdog: a shader that never terminates ends the run after --gpu-timeout with code 2,
+// naming the pass that was running (not the one before it), and writes no image.
+TEST(BadInput, GpuWatchdogNamesThePassThatDoesNotTerminate) {
+    TempDir d("loom-bad");
+    writeFile(d / "fill.comp",
+              "#version 460\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
+              "layout(rgba32f) uniform writeonly image2D outImage;\n"
+              "void main() { imageStore(outImage, ivec2(gl_GlobalInvocationID.xy), vec4(0)); }\n");
+    // llvmpipe ends every loop after 65535 iterations (its own loop limiter), so no loop runs
+    // forever there; 4M invocations of a 1M-step loop stand in for one that does (minutes).
+    writeFile(d / "spin.comp",
+              "#version 460\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
+              "layout(rgba32f) uniform readonly image2D inImage;\n"
+              "layout(rgba32f) uniform writeonly image2D outImage;\n"
+              "void main() {\n  ivec2 p = ivec2(gl_GlobalInvocationID.xy);\n"
+              "  float x = imageLoad(inImage, p % 8).x + float(p.x);\n"
+              "  for (uint a = 0u; a != 1000000u; ++a) x = fract(sin(x) * 43758.5453 + float(a));\n"
+              "  imageStore(outImage, p, vec4(x));\n}\n");
+    writeFile(d / "spin.json", R"({"name": "spin", "passes": [
+  {"name": "fill", "type": "ComputePass", "params": {"shader": "fill.comp",
+    "outputs": {"out": {"glsl": "outImage", "format": "rgba32f"}}}},
+  {"name": "spin", "type": "ComputePass", "params": {"shader": "spin.comp",
+    "dispatch": [2048, 2048, 1], "inputs": {"in": {"glsl": "inImage", "format": "rgba32f"}},
+    "outputs": {"out": {"glsl": "outImage", "format": "rgba32f"}}}}],
+  "edges": [["fill.out", "spin.in"]], "outputs": ["spin.out"]})");
+    auto start = std::chrono::steady_clock::now();
+    Result r = runLoom(d, "render spin.json --gpu-timeout 3" + kSmall);
+    double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    expectNamedError(r, {"GPU watchdog", "3 s", "pass 'spin' (ComputePass) was running"});
+    EXPECT_EQ(r.err.find("pass 'fill'"), std::string::npos) << r.err;
+    EXPECT_LT(seconds, 100.0) << "the 120 s test timeout, not the watchdog, ended the run";
+    EXPECT_FALSE(std::filesystem::exists(d / "out.exr"));
+    // The environment variable sets the same watchdog for loom run.
+    writeFile(d / "spin.lua",
+              "local r = loom.renderer{graph = 'spin.json', width = 8, height = 8}\nr:frame()\n");
+    r = runLoom(d, "run spin.lua", "LOOM_GPU_TIMEOUT=3");
+    expectNamedError(r, {"GPU watchdog", "pass 'spin' (ComputePass) was running"});
+    expectNamedError(runLoom(d, "render spin.json --gpu-timeout -1" + kSmall), {"--gpu-timeout"});
 }
 
 // A failed write leaves the old file as it was: full disk (a file-size limit stands in for
