@@ -670,8 +670,7 @@ VkDeviceMemory Context::allocate(VkMemoryRequirements req, VkMemoryPropertyFlags
     ai.allocationSize = req.size;
     ai.memoryTypeIndex = findMemoryType(req.memoryTypeBits, props);
     VkDeviceMemory mem;
-    checkMemory(vkAllocateMemory(mDevice, &ai, nullptr, &mem), "vkAllocateMemory", name,
-                req.size);
+    checkMemory(vkAllocateMemory(mDevice, &ai, nullptr, &mem), "vkAllocateMemory", name, req.size);
     return mem;
 }
 
@@ -731,8 +730,8 @@ std::shared_ptr<Image> Context::createImage(uint32_t width, uint32_t height, For
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(mDevice, img->mImage, &req);
     img->mMemory = allocate(req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, name);
-    checkMemory(vkBindImageMemory(mDevice, img->mImage, img->mMemory, 0), "vkBindImageMemory",
-                name, req.size);
+    checkMemory(vkBindImageMemory(mDevice, img->mImage, img->mMemory, 0), "vkBindImageMemory", name,
+                req.size);
     VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     vci.image = img->mImage;
     vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
@@ -853,8 +852,12 @@ Watchdog& watchdogState() {
 }
 }  // namespace
 
-void Context::setWatchdog(Watchdog watchdog) { watchdogState() = std::move(watchdog); }
-const Watchdog& Context::watchdog() { return watchdogState(); }
+void Context::setWatchdog(Watchdog watchdog) {
+    watchdogState() = std::move(watchdog);
+}
+const Watchdog& Context::watchdog() {
+    return watchdogState();
+}
 
 std::string Context::describeHang(const CommandList& list) const {
     const Watchdog& dog = watchdog();
