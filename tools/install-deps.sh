@@ -14,6 +14,8 @@ PACKAGES=(
   libimgui-dev libglfw3-dev xvfb xauth
   libtinyobjloader-dev libtinygltf-dev libpugixml-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev
+  slurmctld slurmd slurm-client munge
 )
 
 missing=()

@@ -14,6 +14,7 @@
 
 #include "apps/CliArgs.h"
 #include "apps/loom/PassDocs.h"
+#include "apps/loom/Sweep.h"
 #include "core/graph/Renderer.h"
 #include "core/script/Csv.h"
 #include "core/script/LuaBindings.h"
@@ -65,6 +66,7 @@ commands:
   devices          list Vulkan devices
   run SCRIPT.lua   run a Lua script (captures, sweeps, equal-time comparisons, plots)
   merge OUT PARTS  merge the CSV files of sharded 'loom run --shard' runs
+  sweep-submit     submit a sweep to Slurm: a job array of shards and a merge job
 
 'loom <command> --help' describes each command.
 )";
@@ -124,7 +126,12 @@ Everything after SCRIPT goes to the script: loom.args holds it, and NAME=VALUE o
 --NAME VALUE pairs are read with loom.arg("NAME", default).
 
   --shard I/N   (anywhere) run only the values I, I+N, I+2N, ... (0 <= I < N) of every
-                loom.sweep; join the shards' CSV files with 'loom merge'
+                loom.sweep; loom.write_csv(P) then writes P's part, DIR/STEM.PART-I.csv,
+                tagged with the sweep's id; join the parts with 'loom merge'
+  --shard slurm (anywhere) the shard of this Slurm array task (SLURM_ARRAY_TASK_ID - _MIN of
+                SLURM_ARRAY_TASK_COUNT); the default when SLURM_ARRAY_TASK_ID is set
+  --phase merge (anywhere) loom.phase = "merge" and loom.sweep yields nothing: the script's
+                plot step on merged CSVs (what a sweep's merge job runs)
   --quiet       (before SCRIPT) print only errors
   --gpu-timeout S  (before SCRIPT) GPU watchdog per submit, as for loom render
 
@@ -133,10 +140,16 @@ Example: loom run scripts/equal_time.lua width=64 height=64 budget_ms=400
 )";
 
 const char* kMergeHelp = R"(usage: loom merge OUT.csv PART.csv [PART.csv ...]
+       loom merge --sweep DIR
 
 Concatenates CSV files that have the same header (the shards of a 'loom run --shard' sweep)
 into OUT.csv. Rows are sorted by the 'index' column when there is one, so merged shards
-equal the unsharded run. Empty files (shards that owned no values) are skipped.
+equal the unsharded run. Empty files (shards that owned no values) are skipped. Part files
+(STEM.PART-I.csv) carry their sweep's id and shard: parts of different sweeps, a shard given
+twice or a missing shard are refused.
+
+--sweep DIR merges a 'loom sweep-submit' directory: if any task failed or never ran it names
+them and merges nothing; otherwise it merges every CSV the tasks wrote from its parts.
 )";
 
 bool isHelp(const std::string& a) {
@@ -292,6 +305,7 @@ int cmdRender(const std::vector<std::string>& args) {
 int cmdRun(const std::vector<std::string>& args) {
     script::LuaRuntime::Options o;
     std::string file;
+    bool sharded = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         if (a == "--shard" || a.rfind("--shard=", 0) == 0) {
@@ -300,7 +314,18 @@ int cmdRun(const std::vector<std::string>& args) {
                 if (i + 1 >= args.size()) throw UsageError("--shard needs a value I/N");
                 v = args[++i];
             }
-            script::parseShard(v, o.shardIndex, o.shardCount);
+            if (v == "slurm") {
+                if (!sweep::slurmShard(o.shardIndex, o.shardCount))
+                    throw UsageError(
+                        "--shard slurm: SLURM_ARRAY_TASK_ID is not set (not a Slurm "
+                        "array task)");
+            } else {
+                script::parseShard(v, o.shardIndex, o.shardCount);
+            }
+            sharded = true;
+        } else if (a == "--phase") {
+            if (i + 1 >= args.size()) throw UsageError("--phase needs a value (run or merge)");
+            o.phase = args[++i];
         } else if (!file.empty()) {
             o.args.push_back(a);
         } else if (isHelp(a)) {
@@ -319,16 +344,27 @@ int cmdRun(const std::vector<std::string>& args) {
     }
     if (file.empty()) throw UsageError("run: missing SCRIPT (see loom run --help)");
     if (!std::filesystem::exists(file)) throw UsageError("run: script not found: '" + file + "'");
+    if (!sharded) sweep::slurmShard(o.shardIndex, o.shardCount);
+    if (o.shardCount > 1) {
+        o.sweepId = sweep::sweepId(file, o.args);
+        if (const char* d = std::getenv("LOOM_SWEEP_DIR"); d && *d) o.sweepDir = d;
+        logInfo("shard {}/{} of sweep {}", o.shardIndex, o.shardCount, o.sweepId);
+    }
     script::LuaRuntime lua(o);
     return lua.runFile(file);
 }
 
 int cmdMerge(const std::vector<std::string>& args) {
     std::vector<std::string> files;
-    for (auto& a : args) {
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
         if (isHelp(a)) {
             std::cout << kMergeHelp;
             return 0;
+        }
+        if (a == "--sweep") {
+            if (i + 2 != args.size()) throw UsageError("merge --sweep takes one DIR");
+            return sweep::mergeDirectory(args[i + 1]);
         }
         if (a.rfind("--", 0) == 0) throw UsageError("merge: unknown option '" + a + "'");
         files.push_back(a);
@@ -542,8 +578,10 @@ int main(int argc, char** argv) {
         if (cmd == "devices") return cmdDevices(args);
         if (cmd == "run") return cmdRun(args);
         if (cmd == "merge") return cmdMerge(args);
+        if (cmd == "sweep-submit") return sweep::submit(args);
         throw UsageError("unknown command '" + cmd +
-                         "' (commands: render, validate, passes, devices, run, merge)");
+                         "' (commands: render, validate, passes, devices, run, merge, "
+                         "sweep-submit)");
     } catch (const UserError& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 2;

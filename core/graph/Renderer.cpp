@@ -25,6 +25,15 @@ std::string installedDataDir() {
     return fs::exists(share / "shaders") ? share.string() : "";
 }
 
+std::string dataRoot() {
+    // An installed loom (PREFIX/bin/loom next to PREFIX/share/loom) uses its own copy only, so
+    // it behaves the same whether or not the source tree it was built from still exists.
+    std::string root = installedDataDir();
+    if (root.empty() && fs::exists(std::string(LOOM_SOURCE_DIR) + "/shaders"))
+        root = LOOM_SOURCE_DIR;
+    return root;
+}
+
 std::vector<std::string> defaultShaderPaths() {
     std::vector<std::string> paths;
     if (const char* env = std::getenv("LOOM_SHADER_PATH")) {
@@ -33,11 +42,7 @@ std::vector<std::string> defaultShaderPaths() {
         while (std::getline(ss, p, ':'))
             if (!p.empty()) paths.push_back(p);
     }
-    // An installed loom (PREFIX/bin/loom next to PREFIX/share/loom) uses its own copy only, so
-    // it behaves the same whether or not the source tree it was built from still exists.
-    std::string root = installedDataDir();
-    if (root.empty() && fs::exists(std::string(LOOM_SOURCE_DIR) + "/shaders"))
-        root = LOOM_SOURCE_DIR;
+    std::string root = dataRoot();
     if (!root.empty()) {
         paths.push_back(root + "/shaders");
         paths.push_back(root);  // lets graphs name "shaders/..." or "tests/data/..."

@@ -17,6 +17,9 @@ namespace loom {
 
 // PREFIX/share/loom when this executable is an installed PREFIX/bin one, else "".
 std::string installedDataDir();
+// Where shaders/, graphs/, scripts/ and scenes/ are: installedDataDir(), else the source tree
+// this build came from, else "".
+std::string dataRoot();
 // Directories shaders are searched in: $LOOM_SHADER_PATH (colon-separated), then the installed
 // PREFIX/share/loom/shaders, or in a build tree the source tree's shaders/.
 std::vector<std::string> defaultShaderPaths();

@@ -1,6 +1,7 @@
 #include "core/script/Csv.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -22,12 +23,54 @@ std::string csvQuote(const std::string& field) {
     return out + "\"";
 }
 
+namespace {
+constexpr const char* kSweepTag = "# loom-sweep ";
+
+// "# loom-sweep id=ID shard=I/N" (without the newline).
+SweepPart parseSweepLine(const std::string& path, const std::string& line) {
+    SweepPart part;
+    std::stringstream ss(line.substr(std::string(kSweepTag).size()));
+    std::string word;
+    bool haveId = false, haveShard = false;
+    while (ss >> word) {
+        if (word.rfind("id=", 0) == 0) {
+            part.id = word.substr(3);
+            haveId = !part.id.empty();
+        } else if (word.rfind("shard=", 0) == 0) {
+            unsigned i = 0, n = 0;
+            char tail = 0;
+            if (std::sscanf(word.c_str() + 6, "%u/%u%c", &i, &n, &tail) == 2 && n > 0 && i < n) {
+                part.index = i;
+                part.count = n;
+                haveShard = true;
+            }
+        }
+    }
+    if (!haveId || !haveShard)
+        throw UserError(path + ":1: malformed sweep line '" + line +
+                        "' (expected '# loom-sweep id=ID shard=I/N')");
+    return part;
+}
+}  // namespace
+
+std::string csvPartPath(const std::string& path, uint32_t index) {
+    std::filesystem::path p(path);
+    return (p.parent_path() / (p.stem().string() + ".PART-" + std::to_string(index) + ".csv"))
+        .string();
+}
+
 CsvTable readCsv(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw UserError(path + ": cannot open CSV file");
     std::stringstream ss;
     ss << in.rdbuf();
-    const std::string text = ss.str();
+    std::string text = ss.str();
+    std::optional<SweepPart> sweep;
+    if (text.rfind(kSweepTag, 0) == 0) {
+        size_t eol = text.find('\n');
+        sweep = parseSweepLine(path, text.substr(0, eol));
+        text = eol == std::string::npos ? "" : text.substr(eol + 1);
+    }
 
     // A small RFC 4180 state machine: quoted fields may hold commas, quotes ("") and newlines.
     std::vector<std::vector<std::string>> records;
@@ -74,6 +117,7 @@ CsvTable readCsv(const std::string& path) {
     if (fieldStarted || !field.empty() || !record.empty()) endRecord();
 
     CsvTable table;
+    table.sweep = sweep;
     if (records.empty()) return table;
     table.header = records.front();
     for (size_t r = 1; r < records.size(); ++r) {
@@ -88,6 +132,9 @@ CsvTable readCsv(const std::string& path) {
 
 void writeCsv(const std::string& path, const CsvTable& table) {
     std::string text;
+    if (table.sweep)
+        text = fmt::format("{}id={} shard={}/{}\n", kSweepTag, table.sweep->id, table.sweep->index,
+                           table.sweep->count);
     auto writeRecord = [&](const std::vector<std::string>& rec) {
         for (size_t i = 0; i < rec.size(); ++i) text += (i ? "," : "") + csvQuote(rec[i]);
         text += "\n";
@@ -102,8 +149,33 @@ void writeCsv(const std::string& path, const CsvTable& table) {
 CsvTable mergeCsv(const std::vector<std::string>& paths) {
     CsvTable merged;
     std::string headerFrom;
+    std::optional<SweepPart> sweep;
+    std::string sweepFrom, plainFrom;
+    std::vector<std::string> shardFrom;
     for (auto& path : paths) {
         CsvTable t = readCsv(path);
+        if (t.sweep) {
+            if (!sweep) {
+                sweep = t.sweep;
+                sweepFrom = path;
+                shardFrom.assign(sweep->count, "");
+            } else if (t.sweep->id != sweep->id || t.sweep->count != sweep->count) {
+                throw UserError(fmt::format(
+                    "{}: part of sweep {} ({} shards), but {} is part of sweep {} ({} shards): "
+                    "parts of different sweeps do not merge",
+                    path, t.sweep->id, t.sweep->count, sweepFrom, sweep->id, sweep->count));
+            }
+            std::string& seen = shardFrom[t.sweep->index];
+            if (!seen.empty())
+                throw UserError(fmt::format("{}: shard {}/{} is also in {}", path, t.sweep->index,
+                                            t.sweep->count, seen));
+            seen = path;
+        } else {
+            plainFrom = path;
+        }
+        if (sweep && !plainFrom.empty())
+            throw UserError(fmt::format("{}: not a part of a sweep, but {} is (sweep {})",
+                                        plainFrom, sweepFrom, sweep->id));
         if (t.header.empty()) continue;  // a shard that owned no values
         if (merged.header.empty()) {
             merged.header = t.header;
@@ -118,6 +190,14 @@ CsvTable mergeCsv(const std::vector<std::string>& paths) {
                                         join(t.header), join(merged.header), headerFrom));
         }
         for (auto& row : t.rows) merged.rows.push_back(std::move(row));
+    }
+    if (sweep) {
+        std::string missing;
+        for (uint32_t i = 0; i < sweep->count; ++i)
+            if (shardFrom[i].empty()) missing += (missing.empty() ? "" : ", ") + std::to_string(i);
+        if (!missing.empty())
+            throw UserError(fmt::format("sweep {}: shard(s) {} of {} missing (no part file given)",
+                                        sweep->id, missing, sweep->count));
     }
     auto it = std::find(merged.header.begin(), merged.header.end(), "index");
     if (it != merged.header.end()) {

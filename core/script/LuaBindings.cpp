@@ -30,10 +30,10 @@
 #include "core/scene/SceneGpu.h"
 #include "core/script/Csv.h"
 #include "core/script/Plot.h"
+#include "core/util/AtomicFile.h"
 #include "core/util/Error.h"
 #include "core/util/JsonSource.h"
 #include "core/util/Log.h"
-#include "core/util/AtomicFile.h"
 
 #ifndef LOOM_SOURCE_DIR
 #define LOOM_SOURCE_DIR ""
@@ -61,6 +61,7 @@ struct Host {
     std::string scriptDir;
     std::map<std::string, std::string> named;  // NAME=VALUE / --NAME VALUE script arguments
     std::map<std::string, std::shared_ptr<gpu::Context>> contexts;  // by requested device
+    std::set<std::string> sweepCsvs;  // loom.write_csv targets of a sharded run (the manifest)
     Clock::time_point start = Clock::now();
     struct Progress {
         bool active = false;
@@ -235,8 +236,7 @@ std::vector<double> numberArray(lua_State* L, int i, const std::string& fn,
 // objects with string keys; an empty table is an empty object.
 
 // `ancestors` holds the tables being converted, outermost first: a table met again is a cycle.
-json toJson(lua_State* L, int idx, const std::string& where,
-            std::vector<const void*>& ancestors) {
+json toJson(lua_State* L, int idx, const std::string& where, std::vector<const void*>& ancestors) {
     idx = lua_absindex(L, idx);
     switch (lua_type(L, idx)) {
         case LUA_TNIL:
@@ -254,8 +254,9 @@ json toJson(lua_State* L, int idx, const std::string& where,
         case LUA_TTABLE: {
             const void* self = lua_topointer(L, idx);
             if (std::find(ancestors.begin(), ancestors.end(), self) != ancestors.end())
-                throw ScriptError(where + ": the table contains itself (a cycle); JSON cannot "
-                                          "hold it");
+                throw ScriptError(where +
+                                  ": the table contains itself (a cycle); JSON cannot "
+                                  "hold it");
             if (ancestors.size() >= size_t(kMaxJsonDepth))
                 throw ScriptError(
                     fmt::format("{}: tables nested deeper than {} levels", where, kMaxJsonDepth));
@@ -1273,7 +1274,25 @@ int lWriteCsv(lua_State* L) {
         for (auto& h : table.header) rec.push_back(cells.count(h) ? cells[h] : "");
         table.rows.push_back(std::move(rec));
     }
-    writeCsv(path, table);
+    Host& h = host(L);
+    if (h.options.shardCount > 1) {
+        // A shard writes its part; the merge (loom merge, or a sweep's merge job) joins them.
+        table.sweep = SweepPart{h.options.sweepId.empty() ? "unnamed" : h.options.sweepId,
+                                h.options.shardIndex, h.options.shardCount};
+        std::string part = csvPartPath(path, h.options.shardIndex);
+        writeCsv(part, table);
+        logInfo("{}: shard {}/{} of {}", part, h.options.shardIndex, h.options.shardCount, path);
+        if (!h.options.sweepDir.empty() &&
+            h.sweepCsvs.insert(fs::absolute(path).lexically_normal().string()).second) {
+            std::string list;
+            for (auto& c : h.sweepCsvs) list += c + "\n";
+            writeTextFileAtomic(
+                fmt::format("{}/parts/task-{}.txt", h.options.sweepDir, h.options.shardIndex),
+                "sweep manifest", list);
+        }
+    } else {
+        writeCsv(path, table);
+    }
     lua_pushinteger(L, lua_Integer(rows.size()));
     return 1;
 }
@@ -1494,6 +1513,13 @@ int lSweep(lua_State* L) {
         throw ScriptError(fn + ": 'values' must be a non-empty array");
     Host& h = host(L);
     size_t total = lua_rawlen(L, -1);
+    if (h.options.phase == "merge") {  // the plot step reads the merged CSV instead
+        logInfo("sweep '{}': merge phase, no values run", name);
+        lua_pushinteger(L, lua_Integer(total) + 1);
+        lua_pushinteger(L, 1);
+        lua_pushcclosure(L, sweepNext, 3);
+        return 1;
+    }
     if (h.options.shardCount > 1) {
         size_t mine =
             total > h.options.shardIndex
@@ -1630,6 +1656,8 @@ int openModule(lua_State* L) {
     lua_pushinteger(L, lua_Integer(h->options.shardCount));
     lua_setfield(L, -2, "count");
     lua_setfield(L, -2, "shard");
+    lua_pushstring(L, h->options.phase.c_str());
+    lua_setfield(L, -2, "phase");
     lua_pushstring(L, "0.1");
     lua_setfield(L, -2, "version");
 
@@ -1713,6 +1741,8 @@ LuaRuntime::LuaRuntime(Options options) : mImpl(std::make_unique<Impl>()) {
     if (options.shardCount == 0 || options.shardIndex >= options.shardCount)
         throw UserError(fmt::format("shard {}/{}: expected I/N with 0 <= I < N", options.shardIndex,
                                     options.shardCount));
+    if (options.phase != "run" && options.phase != "merge")
+        throw UserError("--phase must be run or merge, got '" + options.phase + "'");
     mImpl->host.options = std::move(options);
     parseNamedArgs(mImpl->host.options.args, mImpl->host.named);
     mImpl->L = luaL_newstate();

@@ -23,6 +23,15 @@ public:
         std::vector<std::string> args;  // loom.args (script arguments)
         uint32_t shardIndex = 0;        // --shard I/N: this process owns sweep values
         uint32_t shardCount = 1;        // I, I+N, I+2N, ... (0-based)
+        // With shardCount > 1, loom.write_csv(P) writes P's part DIR/STEM.PART-I.csv, tagged
+        // with this id (loom merge refuses parts of different sweeps; "" = "unnamed").
+        std::string sweepId;
+        // A sweep job's directory (loom sweep-submit): each shard lists the CSV files it wrote
+        // in DIR/parts/task-I.txt, for the merge job.
+        std::string sweepDir;
+        // loom.phase: "run", or "merge" when a sweep's merge job runs the script again for its
+        // plot step (loom.sweep then yields no values).
+        std::string phase = "run";
         // Context for renderers on the default device ("" = LOOM_DEVICE, else lavapipe); tests
         // pass theirs. Others are created on first use and shared by every renderer.
         std::shared_ptr<gpu::Context> gpu;

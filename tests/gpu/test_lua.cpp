@@ -586,6 +586,42 @@ TEST(LuaCsv, MergeSortsByIndexAndChecksHeaders) {
     EXPECT_THROW(script::readCsv(tmp / "none.csv"), UserError);
 }
 
+// Parts carry "# loom-sweep id=ID shard=I/N": one sweep, every shard once, none missing.
+TEST(LuaCsv, MergeOfPartsChecksTheSweep) {
+    TempDir tmp("loom-csv");
+    auto part = [&](const std::string& name, const std::string& id, int i, int n,
+                    const std::string& body) {
+        writeFile(tmp / name, "# loom-sweep id=" + id + " shard=" + std::to_string(i) + "/" +
+                                  std::to_string(n) + "\n" + body);
+    };
+    part("a0.csv", "abc", 0, 3, "index,v\n1,x\n");
+    part("a1.csv", "abc", 1, 3, "");  // a shard that owned no values
+    part("a2.csv", "abc", 2, 3, "index,v\n3,z\n");
+    part("b1.csv", "xyz", 1, 3, "index,v\n2,y\n");
+    writeFile(tmp / "plain.csv", "index,v\n2,y\n");
+    auto merged = script::mergeCsv({tmp / "a2.csv", tmp / "a0.csv", tmp / "a1.csv"});
+    EXPECT_FALSE(merged.sweep.has_value());
+    script::writeCsv(tmp / "m.csv", merged);
+    EXPECT_EQ(readFile(tmp / "m.csv"), "index,v\n1,x\n3,z\n");
+    auto expectError = [&](std::vector<std::string> files, const std::string& fragment) {
+        try {
+            script::mergeCsv(files);
+            ADD_FAILURE() << "expected: " << fragment;
+        } catch (const UserError& e) {
+            EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+        }
+    };
+    expectError({tmp / "a0.csv", tmp / "b1.csv", tmp / "a2.csv"},
+                "parts of different sweeps do not merge");
+    expectError({tmp / "a0.csv", tmp / "a2.csv"}, "shard(s) 1 of 3 missing");
+    expectError({tmp / "a0.csv", tmp / "a0.csv", tmp / "a1.csv", tmp / "a2.csv"},
+                "shard 0/3 is also in");
+    expectError({tmp / "a0.csv", tmp / "plain.csv"}, "not a part of a sweep");
+    writeFile(tmp / "bad.csv", "# loom-sweep id=abc shard=3/3\nindex\n");
+    expectError({tmp / "bad.csv"}, "bad.csv:1: malformed sweep line");
+    EXPECT_EQ(script::csvPartPath("out/x/abl.csv", 7), "out/x/abl.PART-7.csv");
+}
+
 // ---------------------------------------------------------------------------------------------
 // `loom run` / `loom merge` and the shipped scripts (subprocesses)
 
@@ -595,8 +631,9 @@ struct CommandResult {
 };
 
 // Runs the loom binary in `cwd` with the test's shader cache.
-CommandResult runLoom(const std::string& args, const TempDir& cwd) {
-    std::string cmd = "cd '" + cwd.str() + "' && LOOM_CACHE_DIR='" + gpuCacheDir() +
+// `env`: NAME=VALUE assignments for the command.
+CommandResult runLoom(const std::string& args, const TempDir& cwd, const std::string& env = "") {
+    std::string cmd = "cd '" + cwd.str() + "' && " + env + " LOOM_CACHE_DIR='" + gpuCacheDir() +
                       "' LOOM_PROGRESS=0 '" + LOOM_BINARY + "' " + args + " >'" + (cwd / "stdout") +
                       "' 2>'" + (cwd / "stderr") + "'";
     int status = std::system(cmd.c_str());
@@ -717,21 +754,51 @@ TEST(LoomRun, AblationShardsMergeToTheUnshardedRun) {
     std::string parts;
     for (int i = 0; i < 3; ++i) {
         std::string shard = std::to_string(i) + "/3";
-        r = runLoom("run " + script("ablation.lua") + " --shard " + shard + common + " out=part" +
-                        std::to_string(i),
+        r = runLoom("run " + script("ablation.lua") + " --shard " + shard + common + " out=parts",
                     tmp);
         ASSERT_EQ(r.exitCode, 0) << shard << "\n" << r.err;
-        script::CsvTable part =
-            script::readCsv(tmp / ("part" + std::to_string(i) + "/ablation.csv"));
-        for (auto& row : part.rows) EXPECT_TRUE(seen.insert(row[0]).second) << "disjoint";
-        parts += " part" + std::to_string(i) + "/ablation.csv";
+        std::string part = "parts/ablation.PART-" + std::to_string(i) + ".csv";
+        script::CsvTable table = script::readCsv(tmp / part);
+        ASSERT_TRUE(table.sweep.has_value()) << part;
+        EXPECT_EQ(table.sweep->index, uint32_t(i));
+        EXPECT_EQ(table.sweep->count, 3u);
+        for (auto& row : table.rows) EXPECT_TRUE(seen.insert(row[0]).second) << "disjoint";
+        parts += " " + part;
     }
+    EXPECT_FALSE(fs::exists(tmp / "parts/ablation.csv")) << "a shard writes its part only";
     EXPECT_EQ(seen, (std::set<std::string>{"1", "2", "3", "4", "5"}));
     r = runLoom("merge merged.csv" + parts, tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     std::string all = readFile(tmp / "all/ablation.csv");
     EXPECT_EQ(readFile(tmp / "merged.csv"), all);
     EXPECT_EQ(std::count(all.begin(), all.end(), '\n'), 6);
+}
+
+// A Slurm array task takes its shard from SLURM_ARRAY_TASK_ID - _MIN of _COUNT, or of
+// LOOM_SWEEP_TASKS with base 0 in a sweep-submit job (a resubmitted subset keeps its shards).
+TEST(LoomRun, ShardOfASlurmArrayTask) {
+    TempDir tmp("loom-run");
+    writeFile(tmp / "s.lua",
+              "print(string.format('shard %d/%d', loom.shard.index, loom.shard.count))\n");
+    auto r = runLoom("run s.lua", tmp,
+                     "SLURM_ARRAY_TASK_ID=5 SLURM_ARRAY_TASK_MIN=4 SLURM_ARRAY_TASK_COUNT=3");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("shard 1/3"), std::string::npos) << r.out;
+    r = runLoom("run --shard slurm s.lua", tmp, "SLURM_ARRAY_TASK_ID=5 LOOM_SWEEP_TASKS=8");
+    EXPECT_NE(r.out.find("shard 5/8"), std::string::npos) << r.out << r.err;
+    r = runLoom("run s.lua --shard 2/4", tmp,
+                "SLURM_ARRAY_TASK_ID=0 SLURM_ARRAY_TASK_MIN=0 SLURM_ARRAY_TASK_COUNT=3");
+    EXPECT_NE(r.out.find("shard 2/4"), std::string::npos) << "--shard I/N wins: " << r.out;
+    r = runLoom("run --shard slurm s.lua", tmp, "env -u SLURM_ARRAY_TASK_ID");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("SLURM_ARRAY_TASK_ID is not set"), std::string::npos) << r.err;
+    r = runLoom("run s.lua", tmp,
+                "SLURM_ARRAY_TASK_ID=9 SLURM_ARRAY_TASK_MIN=0 SLURM_ARRAY_TASK_COUNT=3");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("task 9 is not in [0, 3)"), std::string::npos) << r.err;
+    r = runLoom("run s.lua --phase plot", tmp);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("--phase must be run or merge"), std::string::npos) << r.err;
 }
 
 TEST(LoomRun, TurntableScript) {

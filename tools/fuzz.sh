@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (fuzz/, clang + ASan + UBSan) into build-fuzz/ and runs each
+# for a bounded time on its seed corpus, two at a time. Prints one row per harness (executions,
+# exec/s, coverage edges and features, corpus size, findings) and exits 1 if any harness found
+# a crash, a leak, a sanitizer report, a non-UserError exception or an input slower than 10 s.
+#
+#   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [HARNESS...]   (default: 60 s, all six)
+#
+# Working corpora grow in out/fuzz/corpus/<harness>; findings land in out/fuzz/findings/.
+# A finding becomes a regression test in tests/badinput (see fuzz/README.md).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+seconds=60
+runs=-1
+jobs=2
+harnesses=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seconds) seconds=$2; shift 2 ;;
+    --runs) runs=$2; shift 2 ;;
+    --jobs) jobs=$2; shift 2 ;;
+    -h|--help) sed -n 2,10p "$0"; exit 0 ;;
+    -*) echo "fuzz.sh: unknown option '$1'" >&2; exit 2 ;;
+    *) harnesses+=("$1"); shift ;;
+  esac
+done
+all=(graph_json scene_json mitsuba_xml obj gltf lua_json)
+[ ${#harnesses[@]} -eq 0 ] && harnesses=("${all[@]}")
+for h in "${harnesses[@]}"; do
+  [[ " ${all[*]} " == *" $h "* ]] || { echo "fuzz.sh: unknown harness '$h' (${all[*]})" >&2; exit 2; }
+done
+
+command -v clang++ >/dev/null || { echo "fuzz.sh: needs clang (tools/install-deps.sh installs it)" >&2; exit 2; }
+if [ ! -f build-fuzz/build.ninja ]; then
+  CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DLOOM_FUZZ=ON \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLOOM_BUILD_TESTS=OFF -DLOOM_BUILD_BENCH=OFF >/dev/null
+fi
+targets=()
+for h in "${harnesses[@]}"; do targets+=("fuzz_$h"); done
+cmake --build build-fuzz --target "${targets[@]}" | tail -1
+
+# Seed corpora: fuzz/seeds/<harness> (formats the project keeps no files of), the project's own
+# files of each format, and ../shared/scenes where present.
+seeds() {
+  local h=$1 dir=out/fuzz/seeds/$1
+  rm -rf "$dir" && mkdir -p "$dir"
+  local pattern
+  case "$h" in
+    graph_json) pattern='graphs/*.json tests/data/*.json' ;;
+    scene_json) pattern='scenes/*.json' ;;
+    mitsuba_xml) pattern='scenes/*.xml tests/data/*.xml ../shared/scenes/*/*.xml' ;;
+    obj) pattern='scenes/*.obj tests/data/*.obj ../shared/scenes/*/*.obj' ;;
+    gltf) pattern='scenes/*.gltf tests/data/*.gltf' ;;
+    lua_json) pattern='graphs/*.json scenes/*.json' ;;
+  esac
+  local n=0 f
+  for f in fuzz/seeds/$h/* $pattern; do
+    [ -f "$f" ] || continue
+    # Large meshes slow every execution down without adding syntax.
+    [ "$(stat -c %s "$f")" -le 262144 ] || continue
+    cp "$f" "$dir/$n-$(basename "$f")"
+    n=$((n + 1))
+  done
+  echo "$dir"
+}
+
+mkdir -p out/fuzz/findings out/fuzz/logs
+run_one() {
+  local h=$1 seed corpus=out/fuzz/corpus/$1
+  seed=$(seeds "$h")
+  mkdir -p "$corpus"
+  local dict=() d=fuzz/$h.dict
+  [ "$h" = lua_json ] && d=fuzz/graph_json.dict
+  [ -f "$d" ] && dict=(-dict="$d")
+  ./build-fuzz/fuzz/fuzz_"$h" "$corpus" "$seed" "${dict[@]}" -max_total_time="$seconds" \
+    -runs="$runs" -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
+    -artifact_prefix="out/fuzz/findings/$h-" >"out/fuzz/logs/$h.log" 2>&1 || true
+}
+export -f run_one seeds
+export seconds runs
+
+printf '%s\n' "${harnesses[@]}" | xargs -P "$jobs" -I{} bash -c 'run_one {}'
+
+status=0
+printf '| harness | executions | exec/s | coverage (edges) | features | corpus | findings |\n'
+printf '| --- | --- | --- | --- | --- | --- | --- |\n'
+for h in "${harnesses[@]}"; do
+  log=out/fuzz/logs/$h.log
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo ?)
+  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo ?)
+  last=$(grep -E '^#[0-9]+' "$log" | tail -1)
+  cov=$(echo "$last" | grep -o 'cov: [0-9]*' | grep -o '[0-9]*' || echo ?)
+  ft=$(echo "$last" | grep -o 'ft: [0-9]*' | grep -o '[0-9]*' || echo ?)
+  corp=$(ls "out/fuzz/corpus/$h" | wc -l)
+  found=$(ls out/fuzz/findings 2>/dev/null | grep -c "^$h-" || true)
+  if grep -qE 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer)|runtime error:|not a UserError|Test unit written' "$log"; then
+    status=1
+  fi
+  printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$h" "$execs" "$rate" "$cov" "$ft" "$corp" "$found"
+done
+if [ $status -ne 0 ]; then
+  echo "fuzz.sh: findings (logs in out/fuzz/logs, inputs in out/fuzz/findings):" >&2
+  grep -lE 'ERROR: |runtime error:|not a UserError|Test unit written' out/fuzz/logs/*.log >&2 || true
+fi
+exit $status
