@@ -4,9 +4,10 @@
 # exec/s, coverage edges and features, corpus size, findings) and exits 1 if any harness found
 # a crash, a leak, a sanitizer report, a non-UserError exception or an input slower than 10 s.
 #
-#   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [HARNESS...]   (default: 60 s, all six)
+#   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [--build DIR] [--out DIR] [HARNESS...]
+#                 (defaults: 60 s, 2 jobs, build-fuzz/, out/fuzz/, all six harnesses)
 #
-# Working corpora grow in out/fuzz/corpus/<harness>; findings land in out/fuzz/findings/.
+# Working corpora grow in OUT/corpus/<harness>; findings land in OUT/findings/.
 # A finding becomes a regression test in tests/badinput (see fuzz/README.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,12 +15,16 @@ cd "$(dirname "$0")/.."
 seconds=60
 runs=-1
 jobs=2
+build=build-fuzz
+out=out/fuzz
 harnesses=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
     --runs) runs=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
+    --build) build=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
     -h|--help) sed -n 2,10p "$0"; exit 0 ;;
     -*) echo "fuzz.sh: unknown option '$1'" >&2; exit 2 ;;
     *) harnesses+=("$1"); shift ;;
@@ -31,19 +36,24 @@ for h in "${harnesses[@]}"; do
   [[ " ${all[*]} " == *" $h "* ]] || { echo "fuzz.sh: unknown harness '$h' (${all[*]})" >&2; exit 2; }
 done
 
-command -v clang++ >/dev/null || { echo "fuzz.sh: needs clang (tools/install-deps.sh installs it)" >&2; exit 2; }
-if [ ! -f build-fuzz/build.ninja ]; then
-  CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DLOOM_FUZZ=ON \
-    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLOOM_BUILD_TESTS=OFF -DLOOM_BUILD_BENCH=OFF >/dev/null
+# Exit 77 (a skip for ctest) when clang or its sanitizer runtimes are missing.
+command -v clang++ >/dev/null || { echo "fuzz.sh: needs clang (tools/install-deps.sh installs it)" >&2; exit 77; }
+ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1 ||
+  { echo "fuzz.sh: needs libclang-rt-14-dev (libFuzzer)" >&2; exit 77; }
+if [ ! -f "$build/build.ninja" ]; then
+  # -O1 -gline-tables-only: what libFuzzer recommends, and it builds faster than -O2 -g.
+  CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DLOOM_FUZZ=ON -DCMAKE_BUILD_TYPE=None \
+    -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only" -DCMAKE_C_FLAGS="-O1 -gline-tables-only" \
+    -DLOOM_BUILD_TESTS=OFF -DLOOM_BUILD_BENCH=OFF >/dev/null
 fi
 targets=()
 for h in "${harnesses[@]}"; do targets+=("fuzz_$h"); done
-cmake --build build-fuzz --target "${targets[@]}" | tail -1
+cmake --build "$build" --target "${targets[@]}" | tail -1
 
 # Seed corpora: fuzz/seeds/<harness> (formats the project keeps no files of), the project's own
 # files of each format, and ../shared/scenes where present.
 seeds() {
-  local h=$1 dir=out/fuzz/seeds/$1
+  local h=$1 dir=$out/seeds/$1
   rm -rf "$dir" && mkdir -p "$dir"
   local pattern
   case "$h" in
@@ -65,20 +75,20 @@ seeds() {
   echo "$dir"
 }
 
-mkdir -p out/fuzz/findings out/fuzz/logs
+mkdir -p "$out/findings" "$out/logs"
 run_one() {
-  local h=$1 seed corpus=out/fuzz/corpus/$1
+  local h=$1 seed corpus=$out/corpus/$1
   seed=$(seeds "$h")
   mkdir -p "$corpus"
   local dict=() d=fuzz/$h.dict
   [ "$h" = lua_json ] && d=fuzz/graph_json.dict
   [ -f "$d" ] && dict=(-dict="$d")
-  ./build-fuzz/fuzz/fuzz_"$h" "$corpus" "$seed" "${dict[@]}" -max_total_time="$seconds" \
+  "$build/fuzz/fuzz_$h" "$corpus" "$seed" "${dict[@]}" -max_total_time="$seconds" \
     -runs="$runs" -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
-    -artifact_prefix="out/fuzz/findings/$h-" >"out/fuzz/logs/$h.log" 2>&1 || true
+    -artifact_prefix="$out/findings/$h-" >"$out/logs/$h.log" 2>&1 || true
 }
 export -f run_one seeds
-export seconds runs
+export seconds runs build out
 
 printf '%s\n' "${harnesses[@]}" | xargs -P "$jobs" -I{} bash -c 'run_one {}'
 
@@ -86,21 +96,25 @@ status=0
 printf '| harness | executions | exec/s | coverage (edges) | features | corpus | findings |\n'
 printf '| --- | --- | --- | --- | --- | --- | --- |\n'
 for h in "${harnesses[@]}"; do
-  log=out/fuzz/logs/$h.log
+  log=$out/logs/$h.log
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo ?)
   rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo ?)
-  last=$(grep -E '^#[0-9]+' "$log" | tail -1)
+  last=$(grep -E "^#[0-9]+" "$log" | tail -1 || true)
   cov=$(echo "$last" | grep -o 'cov: [0-9]*' | grep -o '[0-9]*' || echo ?)
   ft=$(echo "$last" | grep -o 'ft: [0-9]*' | grep -o '[0-9]*' || echo ?)
-  corp=$(ls "out/fuzz/corpus/$h" | wc -l)
-  found=$(ls out/fuzz/findings 2>/dev/null | grep -c "^$h-" || true)
+  corp=$(ls "$out/corpus/$h" | wc -l)
+  found=$(ls "$out/findings" 2>/dev/null | grep -c "^$h-" || true)
   if grep -qE 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer)|runtime error:|not a UserError|Test unit written' "$log"; then
+    status=1
+  elif ! grep -qE '^Done [0-9]+ runs' "$log"; then
+    echo "fuzz.sh: $h did not run to the end: $(tail -n 3 "$log")" >&2
     status=1
   fi
   printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$h" "$execs" "$rate" "$cov" "$ft" "$corp" "$found"
 done
 if [ $status -ne 0 ]; then
-  echo "fuzz.sh: findings (logs in out/fuzz/logs, inputs in out/fuzz/findings):" >&2
-  grep -lE 'ERROR: |runtime error:|not a UserError|Test unit written' out/fuzz/logs/*.log >&2 || true
+  echo "fuzz.sh: findings (logs in $out/logs, inputs in $out/findings):" >&2
+  grep -lE 'ERROR: |runtime error:|not a UserError|Test unit written' "$out"/logs/*.log >&2 || true
+  for f in "$out"/findings/*; do [ -f "$f" ] && { echo "--- $f" >&2; tail -n 30 "$out/logs/$(basename "$f" | cut -d- -f1)"*.log >&2; }; done
 fi
 exit $status
