@@ -1,8 +1,8 @@
 # Sourced by the bench scripts: strict mode, the repository root as working directory, and
-# LOOM = the loom binary of BUILD (default build-bench), which must exist.
+# LOOM = the loom binary (default: that of BUILD, default build-bench), which must exist.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${BUILD:-$ROOT/build-bench}"
-LOOM="$BUILD/apps/loom"
+LOOM="${LOOM:-$BUILD/apps/loom}"
 cd "$ROOT"
 [ -x "$LOOM" ] || { echo "build loom first: cmake -S . -B build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release && ninja -C build-bench loom" >&2; exit 2; }
