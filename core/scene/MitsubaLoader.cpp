@@ -7,6 +7,7 @@
 // Every plugin element's properties are tracked; properties Loom does not read produce one
 // warning each (or a debug line for ones that do not affect the image, e.g. near_clip).
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -229,11 +230,14 @@ public:
             return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
         };
         if (!value.empty() && value[0] == '#') {  // "#rrggbb", sRGB encoded
-            if (value.size() != 7) fail(node, "expected a colour '#rrggbb', got '" + value + "'");
+            if (value.size() != 7 || !std::all_of(value.begin() + 1, value.end(), [](char ch) {
+                    return std::isxdigit(static_cast<unsigned char>(ch));
+                }))
+                fail(node, "expected a colour '#rrggbb' (hex digits), got '" + value + "'");
             glm::vec3 c;
             for (int i = 0; i < 3; ++i)
-                c[i] =
-                    srgbDecode(float(std::stoi(value.substr(1 + 2 * i, 2), nullptr, 16)) / 255.0f);
+                c[i] = srgbDecode(
+                    float(std::strtol(value.substr(1 + 2 * i, 2).c_str(), nullptr, 16)) / 255.0f);
             return c;
         }
         if (tag == "rgb" || tag == "srgb") {
@@ -1021,8 +1025,7 @@ public:
                 if (std::find(mIncludeStack.begin(), mIncludeStack.end(), canonical) !=
                     mIncludeStack.end())
                     fail(child, "include cycle: " + chain + canonical);
-                if (mIncludeStack.size() >= 32)
-                    fail(child, "includes nested deeper than 32 files");
+                if (mIncludeStack.size() >= 32) fail(child, "includes nested deeper than 32 files");
                 XmlFile& inc = parseFile(path);
                 mIncludeStack.push_back(canonical);
                 processChildren(inc.doc.document_element());

@@ -191,6 +191,26 @@ TEST(BadInput, PhysicalRangesAreCheckedInEveryFormat) {
     expectNamedError(render("fov.json"), {"fov.json:", "fov"});
 }
 
+// Inputs the fuzzers found (fuzz/README.md): each once crashed a loader or left it with an
+// exception that was not a named error.
+TEST(BadInput, FuzzerFindingsAreNamedErrors) {
+    TempDir d("loom-bad");
+    // fuzz_mitsuba_xml: a non-hex '#rrggbb' colour threw std::invalid_argument from stoi
+    // ("#33)699"), or was read in part ("#3)6699" as 3).
+    for (const char* colour : {"#33)699", "#3)6699", "#zzzzzz"}) {
+        writeFile(d / "hex.xml", std::string(R"(<scene version="0.5.0">
+  <shape type="sphere">
+    <bsdf type="plastic"><srgb name="diffuseReflectance" value=")") +
+                                     colour +
+                                     R"("/></bsdf>
+  </shape>
+</scene>
+)");
+        expectNamedError(runLoom(d, std::string("render ") + kGraph + " --scene hex.xml" + kSmall),
+                         {"hex.xml:3", "#rrggbb", colour});
+    }
+}
+
 TEST(BadInput, ComputePassDispatchesWithinTheDeviceLimits) {
     TempDir d("loom-bad");
     writeFile(d / "k.comp",
