@@ -162,13 +162,14 @@ void submitJobs(const Sweep& s, const std::string& array) {
     fillJob("merge.sbatch");
     std::string extra;
     for (const auto& o : s.sbatch) extra += " " + shellQuote(o);
-    std::string arrayId = runCommand(
-        "sbatch --parsable --array=" + array + extra + " " + shellQuote(s.dir + "/sweep.sbatch"),
-        "sbatch (array job)");
+    std::string arrayId = runCommand("timeout 120 sbatch --parsable --array=" + array + extra +
+                                         " " + shellQuote(s.dir + "/sweep.sbatch"),
+                                     "sbatch (array job)");
     arrayId = arrayId.substr(0, arrayId.find_first_of(";\n"));
-    std::string mergeId = runCommand("sbatch --parsable --dependency=afterany:" + arrayId + extra +
-                                         " " + shellQuote(s.dir + "/merge.sbatch"),
-                                     "sbatch (merge job)");
+    std::string mergeId =
+        runCommand("timeout 120 sbatch --parsable --dependency=afterany:" + arrayId + extra + " " +
+                       shellQuote(s.dir + "/merge.sbatch"),
+                   "sbatch (merge job)");
     mergeId = mergeId.substr(0, mergeId.find_first_of(";\n"));
     {
         std::ofstream jobs(s.dir + "/jobs.txt", std::ios::app);

@@ -8,12 +8,13 @@ loom=$(realpath "$1")
 src=$(cd "$(dirname "$0")/../.." && pwd)
 work=$(mktemp -d /tmp/loom-slurm-test.XXXXXX)
 export LOOM_SLURM_DIR=$work/cluster LOOM_SLURM_PORT=$((17000 + RANDOM % 2000)) LOOM_PROGRESS=0
-start_out=$(bash "$src/tools/slurm-local.sh" start 2>&1)
-rc=$?
-if [ $rc -eq 77 ]; then echo "SKIP: $start_out"; rm -rf "$work"; exit 77; fi
-[ $rc -eq 0 ] || { echo "FAIL: the cluster did not start:"; echo "$start_out"; exit 1; }
 cleanup() { bash "$src/tools/slurm-local.sh" stop >/dev/null 2>&1; rm -rf "$work"; }
 trap cleanup EXIT
+start_out=$(timeout 120 bash "$src/tools/slurm-local.sh" start 2>&1)
+rc=$?
+if [ $rc -eq 77 ]; then echo "SKIP: $start_out"; exit 77; fi
+[ $rc -eq 0 ] || { echo "FAIL: the cluster did not start (exit $rc):"; echo "$start_out"; exit 1; }
+echo "$start_out"
 export SLURM_CONF=$LOOM_SLURM_DIR/slurm.conf
 fail() { echo "FAIL: $*"; for f in "$work"/sweep*/logs/*.out; do [ -f "$f" ] && { echo "--- $f"; tail -n 20 "$f"; }; done; exit 1; }
 
@@ -23,7 +24,7 @@ wait_sweep() {
   merge=$(awk '/^merge/ {id=$2} END {print id}' "$dir/jobs.txt")
   for _ in $(seq $((limit * 2))); do
     [ -f "$dir/DONE" ] && return 0
-    if ! squeue -h -j "$merge" 2>/dev/null | grep -q .; then
+    if ! timeout 10 squeue -h -j "$merge" 2>/dev/null | grep -q .; then
       sleep 1
       [ -f "$dir/DONE" ] && return 0
       return 1
