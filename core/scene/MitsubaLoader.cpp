@@ -929,8 +929,11 @@ public:
             std::string tag = target.name();
             if (tag == "film") {
                 Props f(*this, target);
-                cam.filmWidth = uint32_t(f.getInt("width", 768));
-                cam.filmHeight = uint32_t(f.getInt("height", 576));
+                int w = f.getInt("width", 768), h = f.getInt("height", 576);
+                if (w < 1 || h < 1 || w > 16384 || h > 16384)
+                    fail(target, fmt::format("film size {}x{} is outside 1..16384", w, h));
+                cam.filmWidth = uint32_t(w);
+                cam.filmHeight = uint32_t(h);
                 f.reportUnused(
                     {"crop_offset_x", "crop_offset_y",  "crop_width",         "crop_height",
                      "file_format",   "pixel_format",   "component_format",   "rfilter",
@@ -1237,6 +1240,9 @@ int Props::getInt(const std::string& name, int def) {
     if (std::string(n.name()) != "integer") mLoader.fail(n, "expected an <integer>");
     float v = mLoader.parseNumber(n, "value");
     if (v != std::floor(v)) mLoader.fail(n, "expected an integer value");
+    // 2^31 is exact in float; anything at or beyond it (inf included) does not fit an int.
+    if (!(v >= -2147483648.0f && v < 2147483648.0f))
+        mLoader.fail(n, "integer value out of range (32-bit)");
     return int(v);
 }
 

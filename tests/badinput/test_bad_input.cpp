@@ -209,6 +209,23 @@ TEST(BadInput, FuzzerFindingsAreNamedErrors) {
         expectNamedError(runLoom(d, std::string("render ") + kGraph + " --scene hex.xml" + kSmall),
                          {"hex.xml:3", "#rrggbb", colour});
     }
+    // fuzz_mitsuba_xml (UBSan): an <integer> of 1e39 or 3e9 was converted to int (undefined
+    // behaviour; a film width of 1e39 came out as some int).
+    for (const char* big : {"1e39", "3e9", "-3e9"}) {
+        writeFile(d / "int.xml",
+                  std::string("<scene version=\"3.0.0\">\n  <sensor type=\"perspective\">\n"
+                              "    <film type=\"hdrfilm\"><integer name=\"width\" "
+                              "value=\"") +
+                      big + "\"/></film>\n  </sensor>\n  <shape type=\"sphere\"/>\n</scene>\n");
+        expectNamedError(runLoom(d, std::string("render ") + kGraph + " --scene int.xml" + kSmall),
+                         {"int.xml:3", "out of range"});
+    }
+    writeFile(d / "film.xml",
+              "<scene version=\"3.0.0\">\n  <sensor type=\"perspective\">\n"
+              "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"-5\"/>"
+              "</film>\n  </sensor>\n  <shape type=\"sphere\"/>\n</scene>\n");
+    expectNamedError(runLoom(d, std::string("render ") + kGraph + " --scene film.xml" + kSmall),
+                     {"film.xml:3", "film size -5x576"});
 }
 
 TEST(BadInput, ComputePassDispatchesWithinTheDeviceLimits) {
