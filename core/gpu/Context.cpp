@@ -399,13 +399,11 @@ void CommandList::copyBuffer(const Buffer& src, const Buffer& dst, VkDeviceSize 
 }
 
 uint32_t CommandList::timestamp(std::string label) {
-    if (!label.empty()) {
-        if (!mProgress) {
-            mProgress = mContext->createBuffer(4 * kMaxStamps, "watchdog progress", true);
-            std::memset(mProgress->mapped(), 0, 4 * kMaxStamps);
-        }
-        if (mLabels.size() < kMaxStamps)
-            vkCmdFillBuffer(mCmd, mProgress->handle(), 4 * mLabels.size(), 4, 1u);
+    if (!label.empty() && mLabels.size() < kMaxStamps) {
+        // One buffer per context, cleared at each submit: submits are serial (submit waits).
+        auto& progress = mContext->mProgress;
+        if (!progress) progress = mContext->createBuffer(4 * kMaxStamps, "watchdog progress", true);
+        vkCmdFillBuffer(mCmd, progress->handle(), 4 * mLabels.size(), 4, 1u);
     }
     mLabels.push_back(std::move(label));
     if (!mContext->mTimestampsSupported) return mQueryCount++;
@@ -611,9 +609,13 @@ Context::~Context() {
         }
         mWatchdogThread.join();
     }
-    if (mHung) return;  // the device may still run the timed-out work: leak instead of hanging
+    if (mHung) {  // the device may still run the timed-out work: leak instead of hanging
+        new std::shared_ptr<Buffer>(std::move(mProgress));
+        return;
+    }
     if (mDevice) {
         vkDeviceWaitIdle(mDevice);
+        mProgress.reset();  // before the device goes
         try {
             savePipelineCache();
         } catch (...) {
@@ -862,8 +864,8 @@ const Watchdog& Context::watchdog() {
 std::string Context::describeHang(const CommandList& list) const {
     const Watchdog& dog = watchdog();
     std::string running;
-    if (list.mProgress) {
-        const volatile uint32_t* done = static_cast<const uint32_t*>(list.mProgress->mapped());
+    if (mProgress) {
+        const volatile uint32_t* done = static_cast<const uint32_t*>(mProgress->mapped());
         for (size_t i = 0; i < list.mLabels.size() && i < CommandList::kMaxStamps; ++i) {
             if (list.mLabels[i].empty() || done[i] != 0u) continue;
             running = list.mLabels[i] + " was running";
@@ -911,6 +913,7 @@ void Context::submit(CommandList& list) {
     VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VkFence fence;
     check(vkCreateFence(mDevice, &fci, nullptr, &fence), "vkCreateFence");
+    if (mProgress) std::memset(mProgress->mapped(), 0, 4 * CommandList::kMaxStamps);
     const Watchdog& dog = watchdog();
     const bool watched = dog.seconds > 0 && dog.onHang;
     if (watched) {

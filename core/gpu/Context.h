@@ -169,10 +169,10 @@ private:
     uint32_t mQueryCount = 0;
     uint32_t mQueryCapacity = 0;
     std::vector<double> mTimestampsNs;
-    // Labelled stamps also write 1 to their slot of a host-visible buffer: the watchdog reads
-    // it while the work runs, with no Vulkan call (lavapipe blocks query reads meanwhile).
+    // Labelled stamps also write 1 to their slot of the context's host-visible progress
+    // buffer: the watchdog reads it while the work runs, with no Vulkan call (lavapipe blocks
+    // query reads meanwhile).
     std::vector<std::string> mLabels;
-    std::shared_ptr<Buffer> mProgress;
     std::vector<std::shared_ptr<void>> mRetained;
     VkDescriptorSet allocateSet(VkDescriptorSetLayout layout);
     // Descriptor set, pipeline and push constants of a dispatch.
@@ -285,6 +285,7 @@ private:
     const CommandList* mWatchedList = nullptr;  // armed while a submit runs
     uint64_t mWatchedSubmit = 0;
     bool mWatchdogStop = false;
+    std::shared_ptr<Buffer> mProgress;  // CommandList::timestamp(label) slots, one per stamp
     void watchdogLoop();
 };
 
