@@ -8,7 +8,7 @@ PACKAGES=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
   glslang-dev glslang-tools
   nlohmann-json3-dev libfmt-dev libglm-dev
-  libopenimageio-dev openimageio-tools
+  libopenexr-dev libstb-dev zlib1g-dev
   libembree-dev
   liblua5.4-dev
   libimgui-dev libglfw3-dev xvfb xauth

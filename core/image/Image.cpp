@@ -1,23 +1,15 @@
 #include "core/image/Image.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 
-#include "core/util/AtomicFile.h"
 #include "core/util/Error.h"
 #include "core/util/Log.h"
 
 namespace loom {
 
 namespace {
-
-float srgbToLinear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
 
 float halfToFloat(uint16_t h) {
     uint32_t sign = (h >> 15) & 1, exp = (h >> 10) & 0x1f, mant = h & 0x3ff;
@@ -53,87 +45,6 @@ uint16_t floatToHalf(float f) {
 }
 
 }  // namespace
-
-ImageData readImage(const std::string& path, bool linearize) {
-    if (!std::filesystem::exists(path)) throw UserError(path + ": image file not found");
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw UserError(path + ": cannot read image: " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
-    ImageData img;
-    img.width = uint32_t(spec.width);
-    img.height = uint32_t(spec.height);
-    img.channels = uint32_t(spec.nchannels);
-    img.pixels.resize(size_t(img.width) * img.height * img.channels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-        throw UserError(path + ": cannot decode image: " + in->geterror());
-    bool is8bit = spec.format == OIIO::TypeDesc::UINT8;
-    in->close();
-    if (linearize && is8bit)
-        for (size_t i = 0; i < img.pixels.size(); ++i)
-            if (img.channels < 4 || i % img.channels != 3)
-                img.pixels[i] = srgbToLinear(img.pixels[i]);
-    return img;
-}
-
-void readImageSize(const std::string& path, uint32_t& width, uint32_t& height) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw UserError(path + ": cannot open image: " + OIIO::geterror());
-    width = uint32_t(in->spec().width);
-    height = uint32_t(in->spec().height);
-}
-
-void checkImagePath(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    if (ext.empty()) throw UserError(path + ": output file needs an extension (.exr, .png, ...)");
-    if (!OIIO::ImageOutput::create(path))
-        throw UserError(path + ": no image writer for '" + ext + "'");
-    checkWritable(path, "image");
-}
-
-void writeImage(const std::string& path, const ImageData& image) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    bool isFloat = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif";
-    if (ext.empty()) throw UserError(path + ": output file needs an extension (.exr, .png, ...)");
-    if (!OIIO::ImageOutput::create(path))
-        throw UserError(path + ": no image writer for '" + ext + "'");
-    uint32_t channels = image.channels;
-    // HDR (RGBE) and JPEG have no alpha channel.
-    if ((ext == ".hdr" || ext == ".jpg" || ext == ".jpeg") && channels == 4) channels = 3;
-    std::vector<float> data;
-    data.reserve(size_t(image.width) * image.height * channels);
-    for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
-        for (uint32_t c = 0; c < channels; ++c) {
-            float v = image.pixels[p * image.channels + c];
-            data.push_back(isFloat ? v : std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f));
-        }
-    OIIO::ImageSpec spec(int(image.width), int(image.height), int(channels),
-                         isFloat ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    if (ext == ".exr") spec.set_format(OIIO::TypeDesc::FLOAT);
-    writeFileAtomic(path, "image", [&](const std::string& file) {
-        auto out = OIIO::ImageOutput::create(file);
-        if (!out) throw UserError(path + ": no image writer for '" + ext + "'");
-        if (!out->open(file, spec))
-            throw UserError(path + ": cannot open for writing: " + out->geterror());
-        if (!out->write_image(OIIO::TypeDesc::FLOAT, data.data()))
-            throw UserError(path + ": cannot write image: " + out->geterror());
-        if (!out->close()) throw UserError(path + ": cannot write image: " + out->geterror());
-        // Not every writer reports a short write (a full disk, a file-size limit), so the file
-        // is read back whole before it replaces the target.
-        if (std::filesystem::is_regular_file(file)) {
-            auto in = OIIO::ImageInput::open(file);
-            std::vector<float> back(data.size());
-            bool ok = in && in->spec().width == int(image.width) &&
-                      in->spec().height == int(image.height) &&
-                      in->read_image(0, 0, 0, int(channels), OIIO::TypeDesc::FLOAT, back.data());
-            std::string err = in ? in->geterror() : OIIO::geterror();
-            if (in) in->close();
-            if (!ok)
-                throw UserError(path + ": the written image does not read back (disk full?)" +
-                                (err.empty() ? "" : ": " + err));
-        }
-    });
-}
 
 ImageData downloadImage(gpu::Context& gpu, const gpu::Image& image) {
     using gpu::Format;

@@ -1,5 +1,5 @@
 #pragma once
-// CPU images (float, interleaved channels), file I/O through OpenImageIO, error metrics and
+// CPU images (float, interleaved channels), image files (ImageFile.cpp), error metrics and
 // false colour. Used by the CLI, Lua, tests and the inspector.
 #include <cstdint>
 #include <string>
@@ -12,7 +12,9 @@ namespace loom {
 struct ImageData {
     uint32_t width = 0, height = 0, channels = 4;
     std::vector<float> pixels;  // row-major, top row first
-    float& at(uint32_t x, uint32_t y, uint32_t c) { return pixels[(size_t(y) * width + x) * channels + c]; }
+    float& at(uint32_t x, uint32_t y, uint32_t c) {
+        return pixels[(size_t(y) * width + x) * channels + c];
+    }
     float at(uint32_t x, uint32_t y, uint32_t c) const {
         return pixels[(size_t(y) * width + x) * channels + c];
     }
@@ -21,13 +23,16 @@ struct ImageData {
     }
 };
 
-// Reads EXR/HDR/PNG/JPG (any OIIO format). 8-bit sRGB files are returned as stored (0..1);
-// pass linearize=true to decode sRGB to linear. Throws UserError naming the file.
+// Reads EXR, PFM, Radiance HDR, PNG (8 and 16 bit), JPEG, TGA, BMP and PNM, chosen by the
+// file's magic bytes (Mitsuba 3's set). Integer files are returned as stored (0..1); pass
+// linearize=true to decode sRGB to linear (alpha stays as stored). EXR channels come as R, G,
+// B, A (or Y, A), then the others by name. Throws UserError naming the file.
 ImageData readImage(const std::string& path, bool linearize = false);
 // Reads only the header; throws UserError when the file cannot be opened as an image.
 void readImageSize(const std::string& path, uint32_t& width, uint32_t& height);
-// Writes by extension. Float formats (exr, hdr) store values as they are; 8-bit formats
-// (png, jpg) clamp to [0,1] and quantise (apply ToneMap first for HDR data).
+// Writes by extension: .exr (32-bit float, ZIP), .pfm and .hdr store values as they are;
+// .png, .jpg, .tga, .bmp and .ppm clamp to [0,1] and quantise to 8 bits (apply ToneMap first
+// for HDR data). Formats without alpha (hdr, jpg, pfm, ppm) drop the fourth channel.
 // Throws UserError when writeImage(path, ...) would fail for the path alone: no extension, no
 // writer for it, or a directory that cannot be written. Checked before a render starts.
 void checkImagePath(const std::string& path);

@@ -125,11 +125,10 @@ int addBitmapTexture(Scene& scene, const std::string& path, bool raw, glm::vec2 
         return -1;
     }
     // Colour textures in LDR formats are sRGB-encoded whatever their bit depth; float formats
-    // (EXR, HDR, PFM) are linear. TIFF is ambiguous: only 8-bit data is decoded there.
+    // (EXR, HDR, PFM) are linear.
     std::string ext = lowerExtension(path);
     bool ldr = ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tga" ||
                ext == ".gif" || ext == ".ppm" || ext == ".webp";
-    if (!raw && (ext == ".tif" || ext == ".tiff")) image = readImage(path, true);
     Texture tex;
     tex.name = fs::path(path).filename().string();
     tex.kind = TextureKind::Bitmap;

@@ -1,4 +1,5 @@
-// ImageLoader: an image file (EXR/HDR/PNG/JPG via OpenImageIO) as a texture at its own size.
+// ImageLoader: an image file (EXR, PFM, HDR, PNG, JPEG, ...; core/image/ImageFile.cpp) as a texture
+// at its own size.
 #include <filesystem>
 
 #include "core/graph/RenderGraph.h"
