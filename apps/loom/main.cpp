@@ -91,7 +91,7 @@ const char* kRenderHelp = R"(usage: loom render GRAPH [options]
   --gpu-timeout S           GPU watchdog: a frame that has not finished after S seconds
                             (default 600, or LOOM_GPU_TIMEOUT; 0 = wait forever) ends the
                             run with exit code 2, naming the pass that was running
-  --quiet                   print only errors
+  --quiet                   print only errors (and the --timings table)
 
 Without --out/--output the first marked output goes to out/<graph name>.png.
 )";
@@ -178,7 +178,7 @@ int cmdRender(const std::vector<std::string>& args) {
     uint32_t frames = 1;
     std::string out;
     std::vector<std::pair<std::string, std::string>> outputs, sets;
-    bool checkNan = false, timings = false;
+    bool checkNan = false, timings = false, quiet = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto next = [&]() -> std::string {
@@ -217,9 +217,10 @@ int cmdRender(const std::vector<std::string>& args) {
             o.validation = true;
         else if (a == "--gpu-timeout")
             cli::setGpuTimeout(cli::parseSeconds(a, next()));
-        else if (a == "--quiet")
+        else if (a == "--quiet") {
+            quiet = true;
             setLogLevel(LogLevel::Error);
-        else if (a.rfind("--", 0) == 0)
+        } else if (a.rfind("--", 0) == 0)
             throw UsageError("render: unknown option '" + a + "' (see loom render --help)");
         else if (o.graph.empty())
             o.graph = a;
@@ -275,8 +276,9 @@ int cmdRender(const std::vector<std::string>& args) {
 
     for (auto& [port, file] : outputs) {
         writeImage(file, r.readOutput(port));
-        std::printf("wrote %s (%s, %ux%u, %u frame%s)\n", file.c_str(), port.c_str(), o.width,
-                    o.height, frames, frames == 1 ? "" : "s");
+        if (!quiet)
+            std::printf("wrote %s (%s, %ux%u, %u frame%s)\n", file.c_str(), port.c_str(), o.width,
+                        o.height, frames, frames == 1 ? "" : "s");
     }
     if (timings) {
         std::printf("%-24s %10s\n", "pass", "GPU ms");
