@@ -5,7 +5,7 @@
 # a crash, a leak, a sanitizer report, a non-UserError exception or an input slower than 10 s.
 #
 #   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [--build DIR] [--out DIR] [HARNESS...]
-#                 (defaults: 60 s, 2 jobs, build-fuzz/, out/fuzz/, all six harnesses)
+#                 (defaults: 60 s, 2 jobs, build-fuzz/, out/fuzz/, all seven harnesses)
 #
 # Working corpora grow in OUT/corpus/<harness>; findings land in OUT/findings/.
 # A finding becomes a regression test in tests/badinput (see fuzz/README.md).
@@ -30,7 +30,7 @@ while [ $# -gt 0 ]; do
     *) harnesses+=("$1"); shift ;;
   esac
 done
-all=(graph_json scene_json mitsuba_xml obj gltf lua_json)
+all=(graph_json scene_json mitsuba_xml obj gltf lua_json image)
 [ ${#harnesses[@]} -eq 0 ] && harnesses=("${all[@]}")
 for h in "${harnesses[@]}"; do
   [[ " ${all[*]} " == *" $h "* ]] || { echo "fuzz.sh: unknown harness '$h' (${all[*]})" >&2; exit 2; }
@@ -63,6 +63,7 @@ seeds() {
     obj) pattern='scenes/*.obj tests/data/*.obj ../shared/scenes/*/*.obj' ;;
     gltf) pattern='scenes/*.gltf tests/data/*.gltf' ;;
     lua_json) pattern='graphs/*.json scenes/*.json' ;;
+    image) pattern='tests/data/*.png tests/data/*.exr' ;;
   esac
   local n=0 f
   for f in fuzz/seeds/$h/* $pattern; do

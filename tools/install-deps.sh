@@ -8,7 +8,7 @@ PACKAGES=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
   glslang-dev glslang-tools
   nlohmann-json3-dev libfmt-dev libglm-dev
-  libopenexr-dev libstb-dev zlib1g-dev
+  libopenexr-dev libpng-dev libjpeg62-turbo-dev libstb-dev zlib1g-dev
   libembree-dev
   liblua5.4-dev
   libimgui-dev libglfw3-dev xvfb xauth

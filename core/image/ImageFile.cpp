@@ -1,16 +1,23 @@
-// Image files: the formats Mitsuba 3's Bitmap reads and writes. OpenEXR for EXR, stb_image
-// (Debian's libstb) for PNG, JPEG, Radiance HDR, TGA, BMP and PNM, and PFM by hand. The
-// format is chosen by the file's magic bytes when reading and by the extension when writing.
+// Image files: the formats Mitsuba 3's Bitmap reads and writes. Reading: OpenEXR, libpng and
+// libjpeg-turbo (hardened against malformed files: they are fuzzed upstream), PFM and PNM by
+// hand, and stb_image (Debian's libstb) for Radiance HDR, TGA, BMP, GIF and PSD. stb_image
+// is not meant for untrusted files, and fuzz_image found undefined behaviour in its PNG, JPEG
+// and PNM decoders within seconds, so those never reach it. Writing: OpenEXR, stb_image_write
+// (PNG, JPEG, HDR, TGA, BMP), PFM and PPM by hand. The format is chosen by the file's magic
+// bytes when reading and by the extension when writing.
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <jpeglib.h>
+#include <png.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csetjmp>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -27,11 +34,16 @@ namespace {
 namespace fs = std::filesystem;
 
 // Larger images are refused before anything is allocated: a corrupt header must not make
-// Loom try to allocate terabytes.
+// Loom try to allocate terabytes. 2^28 pixels is a 16k x 16k texture (4 GiB as float RGBA);
+// the fuzz build stops at 2^22 so that libFuzzer's memory limit means a real leak or blow-up.
+#ifdef LOOM_FUZZ_BUILD
+constexpr uint64_t kMaxPixels = uint64_t(1) << 22;
+#else
 constexpr uint64_t kMaxPixels = uint64_t(1) << 28;
+#endif
 constexpr uint32_t kMaxSide = 1u << 16;
 
-enum class FileFormat { Exr, Pfm, Stb };
+enum class FileFormat { Exr, Pfm, Png, Jpeg, Pnm, Stb, Unknown };
 
 std::string lowerExt(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
@@ -49,16 +61,25 @@ std::vector<uint8_t> readFileBytes(const std::string& path) {
     return bytes;
 }
 
+// stb_image only ever sees the formats it is used for (its own format tests are weaker: a file
+// starting FF D8 is a JPEG to it, "P5" a PNM), and TGA, which has no magic, only by extension.
 FileFormat sniff(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    char magic[4] = {};
-    in.read(magic, 4);
-    static const unsigned char exr[4] = {0x76, 0x2f, 0x31, 0x01};
-    if (in.gcount() == 4 && std::memcmp(magic, exr, 4) == 0) return FileFormat::Exr;
-    if (in.gcount() >= 3 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f') &&
-        std::isspace(static_cast<unsigned char>(magic[2])))
-        return FileFormat::Pfm;
-    return FileFormat::Stb;
+    unsigned char magic[11] = {};
+    in.read(reinterpret_cast<char*>(magic), sizeof(magic));
+    const auto n = size_t(in.gcount());
+    auto starts = [&](const char* m, size_t len) {
+        return n >= len && std::memcmp(magic, m, len) == 0;
+    };
+    if (starts("\x76\x2f\x31\x01", 4)) return FileFormat::Exr;
+    if (starts("\x89PNG", 4)) return FileFormat::Png;
+    if (starts("\xff\xd8", 2)) return FileFormat::Jpeg;
+    if (n >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f')) return FileFormat::Pfm;
+    if (n >= 2 && magic[0] == 'P' && magic[1] >= '1' && magic[1] <= '7') return FileFormat::Pnm;
+    if (starts("#?RADIANCE\n", 11) || starts("#?RGBE\n", 7) || starts("BM", 2) ||
+        starts("GIF87a", 6) || starts("GIF89a", 6) || starts("8BPS", 4) || lowerExt(path) == ".tga")
+        return FileFormat::Stb;
+    return FileFormat::Unknown;
 }
 
 void checkSize(const std::string& path, uint64_t width, uint64_t height) {
@@ -68,7 +89,7 @@ void checkSize(const std::string& path, uint64_t width, uint64_t height) {
     if (width > kMaxSide || height > kMaxSide || width * height > kMaxPixels)
         throw UserError(path + ": image is too large (" + std::to_string(width) + "x" +
                         std::to_string(height) + "; at most " + std::to_string(kMaxSide) +
-                        " per side and 2^28 pixels)");
+                        " per side and " + std::to_string(kMaxPixels) + " pixels)");
 }
 
 // --- OpenEXR -------------------------------------------------------------------------------
@@ -218,7 +239,192 @@ std::vector<uint8_t> encodePfm(const ImageData& image, uint32_t channels) {
     return bytes;
 }
 
-// --- stb_image: PNG, JPEG, HDR, TGA, BMP, PNM, GIF, PSD --------------------------------------
+// --- PNG (libpng) ----------------------------------------------------------------------------
+
+struct PngReader {
+    const std::string& path;
+    std::string error;
+};
+
+void pngError(png_structp png, png_const_charp message) {
+    static_cast<PngReader*>(png_get_error_ptr(png))->error = message;
+    png_longjmp(png, 1);
+}
+void pngWarning(png_structp, png_const_charp) {}
+
+struct PngSource {
+    const std::vector<uint8_t>& bytes;
+    size_t pos = 0;
+};
+
+void pngRead(png_structp png, png_bytep out, png_size_t count) {
+    auto* src = static_cast<PngSource*>(png_get_io_ptr(png));
+    if (count > src->bytes.size() - src->pos) png_error(png, "file is truncated");
+    std::memcpy(out, src->bytes.data() + src->pos, count);
+    src->pos += count;
+}
+
+// 8- and 16-bit files come as stored (no gamma conversion); palettes and low bit depths are
+// expanded, tRNS becomes alpha.
+ImageData readPng(const std::string& path, bool headerOnly) {
+    std::vector<uint8_t> bytes = readFileBytes(path);
+    PngReader reader{path, {}};
+    PngSource source{bytes, 0};
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &reader, pngError, pngWarning);
+    if (!png) throw UserError(path + ": cannot read PNG image: out of memory");
+    png_infop info = png_create_info_struct(png);
+    ImageData img;
+    std::vector<uint8_t> raw;
+    std::vector<png_bytep> rows;
+    bool sixteen = false;
+    // Nothing with a destructor is created between setjmp and the reads that may longjmp.
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        throw UserError(path + ": cannot decode PNG image: " + reader.error);
+    }
+    png_set_read_fn(png, &source, pngRead);
+    png_set_user_limits(png, kMaxSide, kMaxSide);
+    png_read_info(png, info);
+    const png_uint_32 w = png_get_image_width(png, info), h = png_get_image_height(png, info);
+    if (uint64_t(w) * h > kMaxPixels) png_error(png, "image is too large");
+    const int depth = png_get_bit_depth(png, info), type = png_get_color_type(png, info);
+    if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+    if (type == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+    if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
+    if (depth == 16) png_set_swap(png);  // little-endian uint16 in memory
+    png_read_update_info(png, info);
+    sixteen = png_get_bit_depth(png, info) == 16;
+    img.width = w;
+    img.height = h;
+    img.channels = png_get_channels(png, info);
+    if (!headerOnly) {
+        const size_t stride = png_get_rowbytes(png, info);
+        raw.resize(stride * h);
+        rows.resize(h);
+        for (png_uint_32 y = 0; y < h; ++y) rows[y] = raw.data() + y * stride;
+        png_read_image(png, rows.data());
+        png_read_end(png, nullptr);
+    }
+    png_destroy_read_struct(&png, &info, nullptr);
+    checkSize(path, img.width, img.height);
+    if (headerOnly) return img;
+    img.pixels.resize(size_t(img.width) * img.height * img.channels);
+    if (sixteen) {
+        for (size_t i = 0; i < img.pixels.size(); ++i) {
+            uint16_t v;
+            std::memcpy(&v, raw.data() + 2 * i, 2);
+            img.pixels[i] = v / 65535.0f;
+        }
+    } else {
+        for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = raw[i] / 255.0f;
+    }
+    return img;
+}
+
+// --- JPEG (libjpeg-turbo) ---------------------------------------------------------------------
+
+struct JpegError {
+    jpeg_error_mgr mgr;
+    std::jmp_buf jump;
+    char message[JMSG_LENGTH_MAX];
+};
+
+void jpegErrorExit(j_common_ptr cinfo) {
+    auto* err = reinterpret_cast<JpegError*>(cinfo->err);
+    cinfo->err->format_message(cinfo, err->message);
+    std::longjmp(err->jump, 1);
+}
+void jpegMessage(j_common_ptr) {}
+
+ImageData readJpeg(const std::string& path, bool headerOnly) {
+    std::vector<uint8_t> bytes = readFileBytes(path);
+    jpeg_decompress_struct cinfo;
+    JpegError err;
+    cinfo.err = jpeg_std_error(&err.mgr);
+    err.mgr.error_exit = jpegErrorExit;
+    err.mgr.output_message = jpegMessage;
+    std::vector<uint8_t> raw;
+    ImageData img;
+    if (setjmp(err.jump)) {
+        jpeg_destroy_decompress(&cinfo);
+        throw UserError(path + ": cannot decode JPEG image: " + err.message);
+    }
+    jpeg_create_decompress(&cinfo);
+    jpeg_mem_src(&cinfo, bytes.data(), static_cast<unsigned long>(bytes.size()));
+    jpeg_read_header(&cinfo, TRUE);
+    if (cinfo.image_width > kMaxSide || cinfo.image_height > kMaxSide ||
+        uint64_t(cinfo.image_width) * cinfo.image_height > kMaxPixels) {
+        std::snprintf(err.message, sizeof(err.message), "image is too large (%ux%u)",
+                      cinfo.image_width, cinfo.image_height);
+        std::longjmp(err.jump, 1);
+    }
+    // CMYK and YCCK (Adobe) files are converted to RGB by the library where it can; others fail.
+    cinfo.out_color_space = cinfo.num_components == 1 ? JCS_GRAYSCALE : JCS_RGB;
+    img.width = cinfo.image_width;
+    img.height = cinfo.image_height;
+    img.channels = cinfo.num_components == 1 ? 1 : 3;
+    if (!headerOnly) {
+        jpeg_start_decompress(&cinfo);
+        const size_t stride = size_t(cinfo.output_width) * cinfo.output_components;
+        raw.resize(stride * cinfo.output_height);
+        while (cinfo.output_scanline < cinfo.output_height) {
+            JSAMPROW row = raw.data() + stride * cinfo.output_scanline;
+            jpeg_read_scanlines(&cinfo, &row, 1);
+        }
+        jpeg_finish_decompress(&cinfo);
+    }
+    jpeg_destroy_decompress(&cinfo);
+    checkSize(path, img.width, img.height);
+    if (headerOnly) return img;
+    img.pixels.resize(raw.size());
+    for (size_t i = 0; i < raw.size(); ++i) img.pixels[i] = raw[i] / 255.0f;
+    return img;
+}
+
+// --- PNM: binary P5 (grey) and P6 (RGB), 8 or 16 bit (big-endian) -----------------------------
+
+ImageData readPnm(const std::string& path, bool headerOnly) {
+    std::vector<uint8_t> bytes = readFileBytes(path);
+    size_t pos = 2;
+    auto token = [&]() {
+        for (;;) {  // whitespace and '#' comments
+            while (pos < bytes.size() && std::isspace(bytes[pos])) ++pos;
+            if (pos < bytes.size() && bytes[pos] == '#')
+                while (pos < bytes.size() && bytes[pos] != '\n') ++pos;
+            else
+                break;
+        }
+        std::string t;
+        while (pos < bytes.size() && std::isdigit(bytes[pos]) && t.size() < 10)
+            t += char(bytes[pos++]);
+        if (t.empty() || t.size() > 9) throw UserError(path + ": not a PNM file (bad header)");
+        return std::stoul(t);
+    };
+    if (bytes[1] != '5' && bytes[1] != '6')
+        throw UserError(path + ": PNM type P" + std::string(1, char(bytes[1])) +
+                        " is not supported (binary P5 and P6 are)");
+    const uint64_t w = token(), h = token(), maxval = token();
+    if (maxval == 0 || maxval > 65535 || pos >= bytes.size() || !std::isspace(bytes[pos]))
+        throw UserError(path + ": not a PNM file (bad maximum value)");
+    ++pos;
+    checkSize(path, w, h);
+    ImageData img;
+    img.width = uint32_t(w);
+    img.height = uint32_t(h);
+    img.channels = bytes[1] == '5' ? 1 : 3;
+    if (headerOnly) return img;
+    const size_t count = size_t(w) * h * img.channels, size = maxval > 255 ? 2 : 1;
+    if (bytes.size() - pos < count * size) throw UserError(path + ": PNM file is truncated");
+    img.pixels.resize(count);
+    for (size_t i = 0; i < count; ++i) {
+        const uint8_t* b = bytes.data() + pos + i * size;
+        uint32_t v = size == 2 ? (uint32_t(b[0]) << 8) | b[1] : b[0];
+        img.pixels[i] = float(std::min<uint32_t>(v, uint32_t(maxval))) / float(maxval);
+    }
+    return img;
+}
+
+// --- stb_image: Radiance HDR, TGA, BMP, GIF, PSD ----------------------------------------------
 
 ImageData readStb(const std::string& path, bool headerOnly, bool& integer) {
     std::vector<uint8_t> bytes = readFileBytes(path);
@@ -331,8 +537,21 @@ ImageData readAny(const std::string& path, bool headerOnly, bool& integer) {
             return readExr(path, headerOnly);
         case FileFormat::Pfm:
             return readPfm(path, headerOnly);
+        case FileFormat::Png:
+            integer = true;
+            return readPng(path, headerOnly);
+        case FileFormat::Jpeg:
+            integer = true;
+            return readJpeg(path, headerOnly);
+        case FileFormat::Pnm:
+            integer = true;
+            return readPnm(path, headerOnly);
         case FileFormat::Stb:
             break;
+        case FileFormat::Unknown:
+            throw UserError(path +
+                            ": cannot read image: not a supported format (EXR, PNG, JPEG, "
+                            "HDR, PFM, PPM/PGM, TGA, BMP, GIF, PSD)");
     }
     return readStb(path, headerOnly, integer);
 }

@@ -196,6 +196,16 @@ TEST(ImageFile, SixteenBitPngMadeFromTheSpec) {
     for (int i = 0; i < 6; ++i) EXPECT_EQ(img.pixels[i], expect[i] / 65535.0f) << i;
 }
 
+TEST(ImageFile, SixteenBitPnmWithCommentsIsBigEndian) {
+    fs::path p = tmpDir() / "grey16.pgm";
+    // P5, a comment in the header, maxval 1000: values scale by 1/1000 and clamp at maxval.
+    writeBytes(p, std::string("P5\n# made by hand\n3 1\n1000\n") +
+                      std::string("\x00\x00\x01\xf4\x03\xe8", 6));
+    ImageData img = readImage(p.string());
+    ASSERT_EQ(img.channels, 1u);
+    EXPECT_TRUE(img.pixels == std::vector<float>({0.0f, 500 / 1000.0f, 1.0f}));
+}
+
 TEST(ImageFile, BigEndianPfmReadsBottomRowFirst) {
     fs::path p = tmpDir() / "be.pfm";
     std::string bytes = "Pf\n2 2\n1.0\n";
@@ -261,7 +271,14 @@ TEST(ImageFile, MalformedFilesAreNamedErrors) {
     writeImage((d / "whole.png").string(), gradient(64, 64, 3));
     std::ifstream in(d / "whole.png", std::ios::binary);
     std::string png((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    expectError("cut.png", png.substr(0, png.size() / 2), "cannot decode image", false);
+    expectError("cut.png", png.substr(0, png.size() / 2), "cannot decode PNG image", false);
+    writeImage((d / "whole.jpg").string(), gradient(64, 64, 3));
+    std::ifstream jin(d / "whole.jpg", std::ios::binary);
+    std::string jpg((std::istreambuf_iterator<char>(jin)), std::istreambuf_iterator<char>());
+    expectError("cut.jpg", jpg.substr(0, 40), "cannot decode JPEG image");
+    expectError("ascii.ppm", "P3\n1 1\n255\n0 0 0\n", "P3 is not supported");
+    expectError("trunc.ppm", "P6\n4 4\n255\n" + std::string(10, 'x'), "truncated", false);
+    expectError("maxval.ppm", "P5\n4 4\n70000\n", "bad maximum value");
 
     EXPECT_NE(
         errorOf([&] { readImage((d / "missing.exr").string()); }).find("image file not found"),
