@@ -57,9 +57,16 @@ ldd "$build/apps/loom" | awk '$2 == "=>" && $3 ~ /^\// {print $1, $3}' | while r
     *) cp -L "$path" "$stage/lib/$name" ;;
   esac
 done
-# The loaders, unpacked from the installed Debian packages (the device has none).
+# The loaders, unpacked from the installed Debian packages (the device has none): the Vulkan
+# loader and glvnd's dispatch library, which NVIDIA's Vulkan driver (libGLX_nvidia) links;
+# GLX and EGL where installed.
 for pkg in libvulkan1 libglvnd0 libglx0 libegl1; do
-  dpkg -L "$pkg" >/dev/null 2>&1 || { echo "device-pack.sh: package $pkg is not installed" >&2; exit 2; }
+  if ! dpkg -L "$pkg" >/dev/null 2>&1; then
+    case "$pkg" in
+      libvulkan1|libglvnd0) echo "device-pack.sh: package $pkg is not installed" >&2; exit 2 ;;
+      *) continue ;;
+    esac
+  fi
   dpkg -L "$pkg" | grep -E '/lib[^/]*\.so\.[0-9]+$' | while read -r f; do cp -L "$f" "$stage/lib/"; done
 done
 # What the build links against, for the README.

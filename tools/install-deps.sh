@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
-  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools libglvnd0
   glslang-dev glslang-tools
   nlohmann-json3-dev libfmt-dev libglm-dev
   libopenexr-dev libpng-dev libjpeg62-turbo-dev libstb-dev zlib1g-dev
