@@ -286,6 +286,14 @@ TEST(ImageFile, MalformedFilesAreNamedErrors) {
     EXPECT_NE(errorOf([&] { readImage(d.string()); }).find("is a directory"), std::string::npos);
 }
 
+// fuzz_image's first finding: a JPEG whose Huffman table made Debian's stb_image index out of
+// bounds (UBSan). JPEG now goes to libjpeg-turbo, which names the problem.
+TEST(ImageFile, FuzzerFindingsAreNamedErrors) {
+    const std::string path = std::string(LOOM_TEST_DATA) + "/fuzz/stb_jpeg_huffman.jpg";
+    std::string err = errorOf([&] { readImage(path); });
+    EXPECT_NE(err.find(path + ": cannot decode JPEG image"), std::string::npos) << err;
+}
+
 TEST(ImageFile, UnwritableFormatsAreRefusedBeforeAnythingIsWritten) {
     fs::path d = tmpDir();
     std::string err = errorOf([&] { checkImagePath((d / "x.tif").string()); });
