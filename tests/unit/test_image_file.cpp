@@ -5,6 +5,7 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
+#include <stb_image.h>
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -119,6 +120,27 @@ TEST(ImageFile, RadianceHdrKeepsEightBitsOfMantissa) {
         float m = std::max({img.pixels[p * 3], img.pixels[p * 3 + 1], img.pixels[p * 3 + 2]});
         for (int k = 0; k < 3; ++k)
             EXPECT_NEAR(back.pixels[p * 3 + k], img.pixels[p * 3 + k], m / 128.0f + 1e-6f);
+    }
+}
+
+// Loom's RGBE reader against stb_image's decoder, bit for bit, on RLE (width >= 8) and flat
+// (width < 8) scanlines.
+TEST(ImageFile, RadianceHdrReadsAsStbImageDoes) {
+    fs::path d = tmpDir();
+    for (uint32_t w : {5u, 9u, 64u}) {
+        fs::path p = d / ("w" + std::to_string(w) + ".hdr");
+        writeImage(p.string(), gradient(w, 7, 3, 30.0f));
+        std::ifstream in(p, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        int sw = 0, sh = 0, sn = 0;
+        float* ref = stbi_loadf_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                            int(bytes.size()), &sw, &sh, &sn, 3);
+        ASSERT_NE(ref, nullptr);
+        ImageData img = readImage(p.string());
+        ASSERT_EQ(img.width, uint32_t(sw));
+        ASSERT_EQ(img.height, uint32_t(sh));
+        EXPECT_TRUE(img.pixels == std::vector<float>(ref, ref + size_t(sw) * sh * 3)) << w;
+        stbi_image_free(ref);
     }
 }
 
@@ -276,6 +298,21 @@ TEST(ImageFile, MalformedFilesAreNamedErrors) {
     std::ifstream jin(d / "whole.jpg", std::ios::binary);
     std::string jpg((std::istreambuf_iterator<char>(jin)), std::istreambuf_iterator<char>());
     expectError("cut.jpg", jpg.substr(0, 40), "cannot decode JPEG image");
+    // Truncated files that stb_image would have filled with zeros, and a corrupt RLE run.
+    for (const char* ext : {".hdr", ".bmp", ".tga"}) {
+        writeImage((d / (std::string("whole") + ext)).string(), gradient(64, 16, 3, 2.0f));
+        std::ifstream win(d / (std::string("whole") + ext), std::ios::binary);
+        std::string whole((std::istreambuf_iterator<char>(win)), std::istreambuf_iterator<char>());
+        expectError(std::string("cut") + ext, whole.substr(0, whole.size() * 2 / 3), "truncated",
+                    false);
+    }
+    expectError("run.hdr",
+                std::string("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 8\n\x02\x02\x00\x08", 49) +
+                    std::string("\xff\x01", 2),
+                "a run past the end of the line", false);
+    expectError("xyze.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 1 +X 1\n\x01\x01\x01\x80",
+                "not supported");
+    expectError("flip.hdr", "#?RADIANCE\n\n+Y 1 +X 1\n\x01\x01\x01\x80", "'-Y H +X W' is");
     expectError("ascii.ppm", "P3\n1 1\n255\n0 0 0\n", "P3 is not supported");
     expectError("trunc.ppm", "P6\n4 4\n255\n" + std::string(10, 'x'), "truncated", false);
     expectError("maxval.ppm", "P5\n4 4\n70000\n", "bad maximum value");
