@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# What a branch costs on llvmpipe (issue 22): a fixed block of ALU work (bench/data/llvmpipe/
+# branch_cost.comp, STEPS dependent sin/cos iterations) run by nobody, by everybody, behind a
+# uniform false branch, behind a per-invocation false branch, by every other invocation
+# (divergent inside each SIMD batch) and by every other batch of 8 (coherent). Prints GPU ms per
+# dispatch (min over REPS) and each case's cost as a share of "every invocation runs it".
+# Never asserts.
+#
+#   bash bench/llvmpipe_costs.sh                  # 256x256, 200 steps, 1 llvmpipe thread
+#   THREADS=2 STEPS=400 bash bench/llvmpipe_costs.sh
+source "$(dirname "$0")/lib.sh"
+W=${WIDTH:-256} H=${HEIGHT:-256} STEPS=${STEPS:-200} FRAMES=${FRAMES:-9} REPS=${REPS:-3}
+OUT=${OUT:-out/llvmpipe_costs}
+mkdir -p "$OUT"
+export LP_NUM_THREADS=${THREADS:-1}
+export LOOM_SHADER_PATH=$ROOT/bench/data/llvmpipe${LOOM_SHADER_PATH:+:$LOOM_SHADER_PATH}
+
+labels=("nobody (no branch)" "every invocation (no branch)" "nobody, uniform false branch"
+  "nobody, per-invocation false branch" "every other invocation (divergent in a batch)"
+  "every other batch of 8 (coherent)")
+kernel_ms() {  # work -> GPU ms per dispatch (first frame excluded)
+  "$LOOM" render bench/data/llvmpipe/branch_cost.json --width "$W" --height "$H" --frames "$FRAMES" \
+    --set kernel.work="$1" --set kernel.steps="$STEPS" --timings --quiet --out "$OUT/last.exr" \
+    >"$OUT/last.log" 2>&1 || { echo "llvmpipe_costs.sh: render failed: $(tail -3 "$OUT/last.log")" >&2; exit 1; }
+  awk '$1 == "kernel" && NF == 2 {print $2}' "$OUT/last.log"
+}
+declare -A best
+for ((r = 0; r < REPS; ++r)); do
+  for w in 0 1 2 3 4 5; do
+    ms=$(kernel_ms "$w")
+    [ -n "$ms" ] || { echo "llvmpipe_costs.sh: no 'kernel' timing in $OUT/last.log" >&2; exit 1; }
+    if [ -z "${best[$w]:-}" ] || awk -v a="$ms" -v b="${best[$w]}" 'BEGIN { exit !(a < b) }'; then best[$w]=$ms; fi
+  done
+done
+echo "llvmpipe_costs: ${W}x${H}, $STEPS steps, LP_NUM_THREADS=$LP_NUM_THREADS, $REPS reps (min); $(uptime)"
+printf '\n| who runs the block | GPU ms | share of all (above none) |\n| --- | --- | --- |\n'
+csv=$OUT/llvmpipe_costs.csv
+echo "work,case,gpu_ms,share" >"$csv"
+for w in 0 1 2 3 4 5; do
+  awk -v l="${labels[$w]}" -v t="${best[$w]}" -v z="${best[0]}" -v a="${best[1]}" -v w="$w" -v csv="$csv" 'BEGIN {
+    s = (t - z) / (a - z); printf "| %s | %.2f | %.0f%% |\n", l, t, 100 * s
+    printf "%d,%s,%.3f,%.4f\n", w, l, t, s >> csv }'
+done
+echo "CSV: $csv"

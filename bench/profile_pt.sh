@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# Where the path tracer's time goes on the current device (issue 22), measured by difference:
+# llvmpipe's JIT code carries no symbols (perf attributes 91% of a PT render to "[JIT]"), so
+# each stage is timed by running it twice per use and subtracting. A variant is the kernel with
+# one call duplicated on inputs the compiler cannot prove equal (tmax 1e30 vs 2e30, a sample
+# permuted) and the duplicate's result dropped by a test that never passes; control flow, path
+# lengths and the image stay those of the base kernel. The marginal cost of the duplicate is
+# the stage's cost, divergence included. A last variant writes, per pixel, the path loop's
+# iterations and those of its SIMD batch (subgroupMax), giving the path loop's lane use.
+# Never asserts.
+#
+#   bash bench/profile_pt.sh                  # grey Cornell box, 128x128, 64 bounces
+#   SCENE=bench/data/peer/glossy_env.json REPS=5 bash bench/profile_pt.sh
+#
+# Variants are perl substitutions on a copy of the shaders (LOOM_SHADER_PATH), each checked to
+# apply exactly once, so a changed kernel makes this script fail instead of timing nothing.
+source "$(dirname "$0")/lib.sh"
+SCENE=${SCENE:-bench/data/peer/cornell_grey.json}
+W=${WIDTH:-128} H=${HEIGHT:-128} FRAMES=${FRAMES:-33} REPS=${REPS:-3} BOUNCES=${BOUNCES:-64}
+OUT=${OUT:-out/profile_pt}
+mkdir -p "$OUT"
+export LP_NUM_THREADS=${THREADS:-2}
+
+PATH_GLSL=lib/integrator/path.glsl
+# name|file|perl regex|replacement
+VARIANTS=(
+  "closest_x2|$PATH_GLSL|found = trace_closest\(o, d, 0\.0, 1e30, BVH_MASK_ALL, hit\);|{ Hit h2; bool f2 = trace_closest(o, d, 0.0, 2e30, BVH_MASK_ALL, h2); found = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit); if (f2 && h2.t < 0.0) { found = true; hit = h2; } }"
+  "shadow_x2|$PATH_GLSL|if \(!trace_any\(nee\.ray\.o, nee\.ray\.d, 0\.0, nee\.ray\.tmax, BVH_MASK_ALL\)\)|if ((uint(trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) & (uint(trace_any(nee.ray.o, nee.ray.d, -1.0, nee.ray.tmax, BVH_MASK_ALL)) | 1u)) == 0u)"
+  "shading_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { Hit h3 = hit; h3.bary *= 0.999; ShadingPoint s3 = shading_point(h3); sh = shading_point(hit); if (s3.n.x > 2.0) sh = s3; }"
+  "surface_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { SurfacePoint sp3 = surface_point(hit.prim, hit.bary * 0.999); sh = shading_point(hit); if (sp3.p.x > 1e30) sh.sp = sp3; }"
+  "material_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { sh = shading_point(hit); Material m3 = scene_materials[scene_shapes[sh.sp.shape].material + (depth > 1000u ? 1u : 0u)]; if (m3.diffuse.x < -1.0) sh.mat = m3; }"
+  "nee_x2|$PATH_GLSL|NeeSample nee = nee_sample\(sh, wo, u_light, ps\.mis, ps\.mis_heuristic\);|NeeSample nee2 = nee_sample(sh, wo, u_light.yxz, ps.mis, ps.mis_heuristic); NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic); if (nee2.value.x < -1.0) nee = nee2;"
+  "bsdf_x2|$PATH_GLSL|BsdfSample bs = bsdf_sample\(sh\.mat, wo, u_bsdf\);|BsdfSample bs2 = bsdf_sample(sh.mat, wo, u_bsdf.yzx); BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf); if (bs2.pdf < -1.0) bs = bs2;"
+  "emission_x2|$PATH_GLSL|vec3 Le = emitter_hit_radiance\(d, found, sh\);|vec3 Le = emitter_hit_radiance(d, found, sh); float lpdf2 = emitter_hit_light_pdf(prev_p, -d, found, hit.prim, sh); if (lpdf2 < -1.0) Le = vec3(lpdf2);"
+)
+
+make_variant() {  # name file regex replacement -> prints the shader dir
+  local dir=$OUT/shaders-$1
+  rm -rf "$dir" && mkdir -p "$dir/passes"
+  cp -r shaders/lib "$dir/lib" && cp -r passes/path_tracer "$dir/passes/path_tracer"
+  if [ -n "$2" ]; then
+    local n
+    n=$(RE="$3" REP="$4" perl -0pi -e '$n += s/$ENV{RE}/$ENV{REP}/g; END { print STDERR $n }' "$dir/$2" 2>&1)
+    [ "$n" = 1 ] || { echo "profile_pt.sh: variant $1 matched $n times in $2 (kernel changed?)" >&2; exit 1; }
+  fi
+  echo "$dir"
+}
+
+pt_ms() {  # shader dir -> PT GPU ms per frame (loom --timings, first frame excluded)
+  LOOM_SHADER_PATH=$1 "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
+    --frames "$FRAMES" --set pt.maxBounces="$BOUNCES" --timings --quiet --out "$OUT/last.exr" >"$OUT/last.log" 2>&1 \
+    || { echo "profile_pt.sh: render failed: $(tail -3 "$OUT/last.log")" >&2; exit 1; }
+  awk '$1 == "pt" && NF == 2 {print $2}' "$OUT/last.log"
+}
+
+declare -A dirs best
+dirs[base]=$(make_variant base "" "" "")
+names=(base)
+for v in "${VARIANTS[@]}"; do
+  IFS='|' read -r name file re rep <<<"$v"
+  dirs[$name]=$(make_variant "$name" "$file" "$re" "$rep")
+  names+=("$name")
+done
+echo "profile_pt: $SCENE, ${W}x${H}, $BOUNCES bounces, $FRAMES frames x $REPS interleaved reps (min); $(uptime)"
+pt_ms "${dirs[base]}" >/dev/null  # compile the base kernel once; variants compile on first use
+for ((r = 0; r < REPS; ++r)); do
+  for n in "${names[@]}"; do
+    ms=$(pt_ms "${dirs[$n]}")
+    if [ -z "${best[$n]:-}" ] || awk -v a="$ms" -v b="${best[$n]}" 'BEGIN { exit !(a < b) }'; then best[$n]=$ms; fi
+  done
+done
+
+# Lane use of the path loop: iterations per lane and per SIMD batch.
+lanes=$OUT/shaders-lanes
+make_variant lanes "" "" "" >/dev/null
+RE='for \(uint depth = 0u;; \+\+depth\) \{' REP='for (uint depth = 0u;; ++depth) { ++prof_path_iters;' \
+  perl -0pi -e 's/$ENV{RE}/$ENV{REP}/ or die "lanes: loop not found\n"' "$lanes/$PATH_GLSL"
+RE='struct PathSettings \{' REP='uint prof_path_iters = 0u;
+struct PathSettings {' perl -0pi -e 's/$ENV{RE}/$ENV{REP}/ or die "lanes: PathSettings not found\n"' "$lanes/$PATH_GLSL"
+RE='(\#include "lib/rng.glsl"\n)' REP='$1#extension GL_KHR_shader_subgroup_arithmetic : require
+' perl -0pi -e 's/$ENV{RE}/$1#extension GL_KHR_shader_subgroup_arithmetic : require\n/ or die "lanes: include not found\n"' \
+  "$lanes/passes/path_tracer/path_tracer.comp"
+RE='(imageStore\(colorImage, ip, )[^;]*;' perl -0pi -e \
+  's/$ENV{RE}/$1vec4(float(prof_path_iters), float(subgroupMax(prof_path_iters)), float(gl_SubgroupSize), 1.0));/ or die "lanes: store not found\n"' \
+  "$lanes/passes/path_tracer/path_tracer.comp"
+LOOM_SHADER_PATH=$lanes "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
+  --frames 4 --set pt.maxBounces="$BOUNCES" --quiet --output accum.output="$OUT/lanes.exr" >"$OUT/lanes.log" 2>&1 \
+  || { echo "profile_pt.sh: lanes render failed: $(tail -3 "$OUT/lanes.log")" >&2; exit 1; }
+cat >"$OUT/lanes.lua" <<'EOF'
+local r, g, b = loom.read_image(loom.arg("image", "")):mean()
+print(string.format("%.3f %.3f %.0f", r, g, b))
+EOF
+read -r lane_iters batch_iters subgroup < <("$LOOM" run "$OUT/lanes.lua" image="$OUT/lanes.exr")
+
+base=${best[base]}
+printf '\n| stage (duplicated) | PT GPU ms/frame | marginal ms | share of base |\n| --- | --- | --- | --- |\n'
+printf '| base | %s | | |\n' "$base"
+csv=$OUT/profile_pt.csv
+echo "variant,pt_ms,marginal_ms,share" >"$csv"
+for n in "${names[@]:1}"; do
+  awk -v n="$n" -v t="${best[$n]}" -v b="$base" 'BEGIN { printf "| %s | %.2f | %.2f | %.0f%% |\n", n, t, t - b, 100 * (t - b) / b }'
+  awk -v n="$n" -v t="${best[$n]}" -v b="$base" 'BEGIN { printf "%s,%.3f,%.3f,%.4f\n", n, t, t - b, (t - b) / b }' >>"$csv"
+done
+awk -v a="$lane_iters" -v m="$batch_iters" -v s="$subgroup" 'BEGIN {
+  printf "\npath loop: %.2f iterations per path, %.2f per SIMD batch of %d lanes: lane use %.0f%%\n", a, m, s, 100 * a / m }'
+echo "CSV: $csv"
