@@ -10,4 +10,48 @@ LOOM_REGISTER_SHADER_ENUM(
     DofShift, "DOF_SHIFT", {"both", "copy", "reconnect"},
     "Area ReSTIR primary-vertex shifts under a thin lens (Zhang et al. 2024)");
 
+void reflectTemporalReuse(PassReflection& r) {
+    r.inputBuffer("reservoirs").doc("this frame's reservoirs (ReSTIRPTInitial)");
+    r.inputBuffer("primary").doc("this frame's primary hits (ReSTIRPTInitial)");
+    r.inputBuffer("prevReservoirs")
+        .previousFrame()
+        .doc("last frame's final reservoirs: connect the last reuse stage's output");
+    r.inputBuffer("prevPrimary")
+        .previousFrame()
+        .doc("last frame's primary hits: connect ReSTIRPTInitial.primary");
+    r.inputTexture("motion", gpu::Format::RG32F).doc("GBuffer.motion (pixels)");
+    r.outputBuffer("reservoirsOut")
+        .bytesPerPixel(restir::kReservoirBytes, restir::kSettingsBytes)
+        .doc("reservoirs after temporal reuse");
+    r.param("confidenceCap", 20.0)
+        .min(0)
+        .doc("history length: previous confidence clamped to cap x current (Lin et al. Sec. 7)");
+    r.param("normalThreshold", 0.5).range(-1, 1).doc("reject history: normal cosine below");
+    r.param("depthThreshold", 0.1).min(0).doc("reject history: relative depth difference above");
+    r.paramEnum("mis", "balance", {"balance", "uniform"})
+        .doc(
+            "generalized balance heuristic (Talbot), or confidence weights over techniques "
+            "that "
+            "can shift the sample (1/|Z|)");
+    r.paramEnum("areaReprojection", "fast", {"fast", "robust", "copy"})
+        .doc(
+            "Area ReSTIR only (initial.reuse = area): fractional motion vectors over the 2x2 "
+            "previous pixels, resampled by previous targets then shifted (fast) or all "
+            "shifted first (robust); copy = one previous pixel, subpixel offset copied");
+    r.paramEnum("dofShift", "both", shaderEnum("DOF_SHIFT"))
+        .doc(
+            "Area ReSTIR with a thin lens: lens-vertex copy, primary-hit reconnection, or "
+            "both combined by MIS (Zhang et al. 2024, Sec. 6; needs mis = balance)");
+    r.paramEnum("movingSuffix", "reject", {"reject", "reuse"})
+        .doc(
+            "paths with a cached suffix after the reconnection vertex when shapes moved since "
+            "the previous frame: reject (the temporal shift fails: exact) or reuse the "
+            "suffix's radiance unchecked (biased near moving shapes)");
+    r.param("countFailedShifts", false)
+        .doc(
+            "ablation, biased: with mis=uniform, count the history even when the current "
+            "sample "
+            "cannot shift to it (the known darkening bug)");
+}
+
 }  // namespace loom::restir

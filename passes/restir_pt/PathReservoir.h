@@ -9,6 +9,7 @@
 #include "core/gpu/Context.h"
 #include "core/gpu/CounterBuffer.h"
 #include "core/graph/KernelParams.h"
+#include "core/graph/Pass.h"
 
 namespace loom::restir {
 
@@ -18,6 +19,10 @@ constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 
 // The element sizes above are checked against the kernels' SPIR-V strides when they bind the
 // buffers (KernelParams). Shared enums (SHIFT, DOF_SHIFT) are registered in PathReservoir.cpp.
+
+// The ports and parameters of temporal reuse by gathering (ReSTIRPTTemporal, and
+// ReservoirSplatTemporal's gather mode, which runs the same kernel): declared once here.
+void reflectTemporalReuse(PassReflection& r);
 
 // Shift attempt/success and ray counters (RestirCounters in counters.glsl), exposed as pass
 // stats.

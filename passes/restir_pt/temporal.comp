@@ -9,6 +9,7 @@
 #include "lib/restir/primary.glsl"
 #include "lib/restir/primary_shift.glsl"
 #include "lib/restir/reservoir.glsl"
+#include "lib/restir/temporal.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430) readonly buffer ReservoirsIn {
@@ -73,16 +74,8 @@ uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 // geometry (scene_select_frame), so with moving shapes the canonical sample's target in the
 // previous domain sees the previous frame's shapes, as the stored previous targets did.
 //
-// What a shift cannot re-evaluate is the suffix after the reconnection vertex x_k (k < n): its
-// radiance is cached (rc_Lo), valid only where nothing it saw has moved. So when shapes moved
-// between the frames, the temporal shift of such a path fails in both directions
-// (movingSuffix = reject): the history technique then does not cover these paths and the
-// canonical technique keeps their whole weight, which is exact. Paths reconnecting at the light
-// vertex (k = n) and pure replay (k = 0) are re-evaluated completely in either geometry.
 bool shift_crosses_moved_suffix(PathSample s) {
-    uint k = path_rc_index(s);
-    return pc.movingSuffix == MOVING_SUFFIX_REJECT && scene_info.previous_geometry.x != 0u && k != 0u &&
-           k < path_length(s);
+    return restir_crosses_moved_suffix(s, pc.movingSuffix == MOVING_SUFFIX_REJECT);
 }
 const uint MAX_PREV_SLOTS = 4u;
 const uint MAX_JOBS = 2u + 2u * MAX_PREV_SLOTS;
@@ -124,14 +117,7 @@ void main() {
     if (idx == 0u) settings_out = cfg;
     PathReservoir rc = reservoirs_in[idx];
     PrimaryHit hc = primary_in[idx];
-    // History generated under other path rules (shift, thresholds, bounces) cannot be shifted
-    // consistently: drop it (the first frame after a parameter change).
-    RestirSettings prev_cfg = settings_prev;
-    bool same_rules = prev_cfg.max_bounces == cfg.max_bounces && prev_cfg.shift == cfg.shift &&
-                      prev_cfg.rough_threshold == cfg.rough_threshold &&
-                      prev_cfg.dist_threshold == cfg.dist_threshold &&
-                      all(equal(prev_cfg.frame_size, cfg.frame_size)) &&
-                      prev_cfg.mis_heuristic == cfg.mis_heuristic && prev_cfg.area == cfg.area;
+    bool same_rules = restir_same_rules(settings_prev, cfg);
     if (pc.historyReset != 0u || !same_rules || !primary_valid(hc)) {
         reservoirs_out[idx] = rc;
         return;
