@@ -23,6 +23,8 @@ enum SplatCounter : size_t {
     kDropped,
     kPixels,
     kNotArea,
+    kBackupAttempts,
+    kBackupSuccess,
     kSplatCounters
 };
 constexpr uint64_t kSplatRecordBytes = 32;
@@ -33,11 +35,12 @@ class ReservoirSplatTemporalPass : public Pass {
 public:
     void reflect(PassReflection& r) const override {
         restir::reflectTemporalReuse(r);
-        r.paramEnum("mode", "scatter", {"gather", "scatter"})
+        r.paramEnum("mode", "scatter", {"gather", "scatter", "scatter_backup"})
             .doc(
                 "gather: Area ReSTIR's backprojection (ReSTIRPTTemporal, areaReprojection fast or "
                 "robust); scatter: every previous sample is forward-projected with its primary hit "
-                "kept and resampled where it lands (Liu et al. 2025)");
+                "kept and resampled where it lands (Liu et al. 2025); scatter_backup: also the "
+                "previous pixel at the rounded motion vector by lens-vertex copy, 3-term MIS");
         r.paramEnum("ablation", "none", {"none", "sumSplatConfidences", "noReverseSplat"})
             .doc(
                 "scatter, biased on purpose for the tests: sum the landed splats' confidences "
@@ -71,7 +74,7 @@ public:
             .set("motionImage", ctx.texture("motion"))
             .set("ReservoirsOut", ctx.buffer("reservoirsOut"))
             .set("RestirCounters", mShiftCounters.reset(ctx.gpu(), ctx.cmd()));
-        mScatter = param<std::string>("mode") == "scatter";
+        mScatter = param<std::string>("mode") != "gather";
         if (!mScatter) {
             KernelParams(*this, *mGather, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
             return;
@@ -111,6 +114,8 @@ public:
         s["reverseSplatAttempts"] = c[kReverseAttempts];
         s["reverseSplatSuccess"] = c[kReverseSuccess];
         s["notAreaPixels"] = c[kNotArea];
+        s["backupAttempts"] = c[kBackupAttempts];
+        s["backupSuccess"] = c[kBackupSuccess];
         return s;
     }
 

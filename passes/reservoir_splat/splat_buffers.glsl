@@ -37,6 +37,8 @@ layout(std430) buffer SplatCounters {
     uint splat_dropped;           // list entries beyond the per-pixel cap (must stay 0)
     uint splat_pixels;            // current pixels resampled
     uint splat_not_area;          // pixels whose reservoirs are not Area ReSTIR's (no reuse)
+    uint splat_backup_attempts;   // scatter_backup: backup samples copied here
+    uint splat_backup_success;    // ... whose shift succeeded
 };
 
 #endif

@@ -41,6 +41,7 @@ layout(push_constant) uniform Params {
     float normalThreshold;
     float depthThreshold;
     uint movingSuffix;
+    uint mode;
     uint ablation;
 } pc;
 
@@ -49,6 +50,22 @@ layout(push_constant) uniform Params {
 const uint MAX_SPLATS = 64u;
 
 uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
+
+// Where a job's path starts in its destination frame: x1 found by tracing the camera ray of a
+// film position (lens-vertex copy), or x1 kept (a splat) and checked visible from the lens point.
+struct X1 {
+    uint prim;
+    vec2 bary;
+    bool valid;
+};
+
+// Jobs, run in this order through one primary traversal and one restir_shift:
+const uint JOB_CANONICAL_PRIMARY = 0u;  // Y*'s x1 here (no shift)
+const uint JOB_CANONICAL_REVERSE = 1u;  // T^-1(Y*): x1 kept, into the previous frame
+const uint JOB_CANONICAL_BACKUP = 2u;   // Y* copied into the backup pixel (previous frame)
+const uint JOB_BACKUP_HERE = 3u;        // the backup pixel's sample copied here
+const uint JOB_BACKUP_REVERSE = 4u;     // T^-1 of that copy: x1 kept, into the previous frame
+const uint JOB_SPLATS = 5u;             // then per landed splat: here, and copied to the backup
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -66,122 +83,237 @@ void main() {
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x5B1A7C3Du);
     float Mc = rc.M, cap = max(pc.confidenceCap * Mc, Mc);
     bool reject_moved = pc.movingSuffix == MOVING_SUFFIX_REJECT;
-    CameraFrame cam = camera_frame(scene_info.camera_open, scene_info.camera_open, 0.0);
     uvec2 fs = pc.frameSize;
+    PrimaryHit hc = primary_in[idx];
+    vec2 motion = imageLoad(motionImage, ivec2(pixel)).xy;
 
-    // The canonical sample's reverse splat T^-1(Y*): its x1 (its own primary ray here) projected
-    // into the previous camera with the same lens sample and visible there. Two rays through one
-    // traversal site, as in splat_forward.comp.
-    PathSample s_rev = rc.s;
-    PrimaryHit dst_rev;
-    dst_rev.camera = vec4(0.0);
-    dst_rev.hit = uvec4(~0u);
-    float J_rev = 0.0, c_r = 0.0;
-    bool rev_ok = false;
-    if (rc.W > 0.0) {
-        atomicAdd(splat_reverse_attempts, 1u);
-        vec3 o, d;
-        camera_ray(cam, (vec2(pixel) + rc.s.film_lens.xy) / vec2(fs), rc.s.film_lens.zw, o, d);
-        float tmax = 1e30;
-        bool any_hit = false;
-        FilmProjection here, prev;
-        float area_here = 0.0, area_prev = 0.0;
-        for (uint step = 0u; step < 2u; ++step) {
-            scene_select_frame(step == 1u);
-            Hit hit;
-            bool found = bvh_traverse(o, d, 0.0, tmax, BVH_MASK_ALL, any_hit, hit);
-            if (step == 1u) {
-                rev_ok = !found;
-                break;
-            }
-            if (!found) break;
-            SurfacePoint xc = surface_point(hit.prim, hit.bary);
-            area_here = xc.area;
-            bool front = splat_project(scene_info.camera_open, rc.s.film_lens.zw, xc.p, xc.ng, fs, here);
-            scene_select_frame(true);
-            SurfacePoint xp = surface_point(hit.prim, hit.bary);
-            area_prev = xp.area;
-            if (!front || !splat_project(scene_info.camera_prev, rc.s.film_lens.zw, xp.p, xp.ng, fs, prev) ||
-                !film_on_screen(prev.film, fs))
-                break;
-            dst_rev.camera = vec4(prev.lens_point, 1.0);
-            dst_rev.hit = uvec4(hit.prim, floatBitsToUint(hit.bary), 0u);
-            ShadowRay sr = shadow_ray_between(prev.lens_point, vec3(0.0), xp.p, xp.ng);
-            o = sr.o;
-            d = sr.d;
-            tmax = sr.tmax;
-            any_hit = true;
-        }
-        scene_select_frame(false);
-        J_rev = splat_jacobian(here, area_here, prev, area_prev);
-        rev_ok = rev_ok && J_rev > 0.0 && !isinf(J_rev) && !restir_crosses_moved_suffix(rc.s, reject_moved);
-        if (rev_ok) {
-            uvec2 r = min(uvec2(floor(prev.film)), fs - 1u);
-            s_rev.film_lens.xy = clamp(prev.film - vec2(r), vec2(0.0), vec2(1.0 - 1e-7));
-            c_r = min(reservoirs_prev[r.y * fs.x + r.x].M, cap);
-            atomicAdd(splat_reverse_success, 1u);
-        }
-    }
+    // The backup technique (scatter_backup): the previous pixel at the rounded motion vector,
+    // when its surface is similar to this pixel's (a choice independent of the samples).
+    ivec2 qb = ivec2(floor(vec2(pixel) + 0.5 + motion));
+    bool backup = pc.mode == MODE_SCATTER_BACKUP && all(greaterThanEqual(qb, ivec2(0))) &&
+                  all(lessThan(qb, ivec2(fs))) &&
+                  restir_similar(hc, primary_prev[pixel_index(qb)], true, pc.normalThreshold,
+                                 pc.depthThreshold);
+    PathReservoir rb = backup ? reservoirs_prev[pixel_index(qb)] : reservoir_empty();
+    float c_b = backup ? min(rb.M, cap) : 0.0;
+    // With a backup the prior frame is reached twice: scatter and backup confidences are halved.
+    float half_prior = backup ? 0.5 : 1.0;
 
-    // Shifts through one restir_shift: first the reverse splat (previous geometry), then the
-    // splats that landed here in ascending source order, so the result does not depend on the
-    // order the atomics filled the list in.
     uvec2 range = splat_ranges[idx];
     uint n_list = min(range.x, MAX_SPLATS);
     if (range.x > MAX_SPLATS) atomicAdd(splat_dropped, range.x - MAX_SPLATS);
+
     PathReservoir r = reservoir_empty();
-    float t_rev = 0.0, c_splats = 0.0;
-    uint last_src = 0u;
-    for (uint j = 0u; j <= n_list; ++j) {
-        PathSample s;
-        PrimaryHit dst;
-        uint src = ~0u;
-        if (j == 0u) {
-            if (!rev_ok) continue;
-            s = s_rev;
-            dst = dst_rev;
-        } else {
+    X1 x_canonical, x_backup;
+    x_canonical.valid = false;
+    x_backup.valid = false;
+    float t_rev = 0.0, J_rev = 0.0, c_r = 0.0;       // the canonical sample's reverse splat
+    float t_canonical_backup = 0.0;                  // its copy into the backup pixel
+    vec3 F_backup = vec3(0.0);                       // the backup sample here
+    PathSample s_backup = rb.s;
+    float t_backup_rev = 0.0, J_backup_rev = 0.0, c_backup_r = 0.0;
+    FilmProjection fp_canonical, fp_backup;          // footprints here of Y* and Y_b
+    float area_canonical = 0.0, area_backup = 0.0;
+    // The splat being resampled (jobs JOB_SPLATS + 2i and + 2i + 1).
+    uint src = ~0u, last_src = 0u;
+    PathSample s_splat;
+    vec3 F_splat = vec3(0.0);
+    float c_splats = 0.0;
+    uint n_jobs = JOB_SPLATS + 2u * n_list;
+    for (uint j = 0u; j < n_jobs; ++j) {
+        // Set the job up: the sample (film offset in the destination once known), its frame, and
+        // how x1 is found.
+        PathSample s = rc.s;
+        bool prev = true, copy = true, trace = true, shift = true, valid = true;
+        vec2 film = vec2(0.0);
+        X1 x;
+        x.valid = false;
+        FilmProjection to;
+        float area_to = 0.0, area_from = 0.0;
+        FilmProjection from = fp_canonical;
+        bool splat_here = j >= JOB_SPLATS && ((j - JOB_SPLATS) & 1u) == 0u;
+        if (j == JOB_CANONICAL_PRIMARY) {
+            valid = rc.W > 0.0;
+            prev = false;
+            film = vec2(pixel) + rc.s.film_lens.xy;
+            shift = false;
+        } else if (j == JOB_CANONICAL_REVERSE || j == JOB_BACKUP_REVERSE) {
+            x = j == JOB_CANONICAL_REVERSE ? x_canonical : x_backup;
+            if (j == JOB_BACKUP_REVERSE) {
+                s = s_backup;
+                from = fp_backup;
+                area_from = area_backup;
+            } else {
+                area_from = area_canonical;
+            }
+            copy = false;
+            valid = x.valid;
+        } else if (j == JOB_CANONICAL_BACKUP) {
+            valid = backup && rc.W > 0.0;
+            film = vec2(qb) + rc.s.film_lens.xy;
+        } else if (j == JOB_BACKUP_HERE) {
+            valid = backup && rb.W > 0.0;
+            s = rb.s;
+            prev = false;
+            film = vec2(pixel) + rb.s.film_lens.xy;
+        } else if (splat_here) {
+            // The next landed splat in ascending source order (deterministic whatever order the
+            // atomics filled the list in). Its x1 was found visible by splat_forward.comp.
+            src = ~0u;
             for (uint e = 0u; e < range.x; ++e) {
                 uint c = splat_lists[range.y + e];
-                if ((j == 1u || c > last_src) && c < src) src = c;
+                if ((j == JOB_SPLATS || c > last_src) && c < src) src = c;
             }
             last_src = src;
             SplatRecord rec = splat_records[src];
             s = reservoirs_prev[src].s;
             s.film_lens.xy = rec.dst_off;
-            dst.camera = vec4(camera_lens_point(cam, s.film_lens.zw), 1.0);
-            dst.hit = uvec4(rec.prim, floatBitsToUint(rec.bary), 0u);
+            s_splat = s;
+            prev = false;
+            copy = false;
+            trace = false;
+            x.prim = rec.prim;
+            x.bary = rec.bary;
+            x.valid = true;
+        } else {
+            // The landed splat copied into the backup pixel (the backup technique's term).
+            valid = backup;
+            s = s_splat;
+            film = vec2(qb) + s_splat.film_lens.xy;
         }
-        bool ok = !restir_crosses_moved_suffix(s, reject_moved);
-        scene_select_frame(j == 0u);
-        vec3 F = ok ? restir_shift(cfg, s, dst) : vec3(0.0);
-        scene_select_frame(false);
-        if (j == 0u) {
-            t_rev = luminance(F);
-            continue;
+        if (!valid) continue;
+        // Kept x1 into the previous frame: project it through the same lens sample.
+        if (!copy && prev) {
+            scene_select_frame(true);
+            SurfacePoint xp = surface_point(x.prim, x.bary);
+            area_to = xp.area;
+            scene_select_frame(false);
+            if (!splat_project(scene_info.camera_prev, s.film_lens.zw, xp.p, xp.ng, fs, to) ||
+                !film_on_screen(to.film, fs))
+                continue;
+            uvec2 rp = min(uvec2(floor(to.film)), fs - 1u);
+            s.film_lens.xy = clamp(to.film - vec2(rp), vec2(0.0), vec2(1.0 - 1e-7));
+            film = to.film;
         }
-        atomicAdd(splat_resampled, 1u);
-        PathReservoir rq = reservoirs_prev[src];
-        float c_i = min(rq.M, cap), t_here = luminance(F), J = splat_records[src].J;
-        c_splats += c_i;
-        float m = splat_mis_prior(c_i, rq.target, Mc, t_here, J);
-        reservoir_add(r, s, F, t_here, m * t_here * rq.W * J, rng_next(rng));
+        // x1: one traversal for every job (closest hit of a copied camera ray, or the kept x1's
+        // visibility from the destination's lens point).
+        CameraPose pose = prev ? scene_info.camera_prev : scene_info.camera_open;
+        CameraFrame cam = camera_frame(pose, pose, 0.0);
+        vec3 lens_point = camera_lens_point(cam, s.film_lens.zw);
+        if (trace) {
+            vec3 o, d;
+            float tmax = 1e30;
+            if (copy) {
+                camera_ray(cam, film / vec2(fs), s.film_lens.zw, o, d);
+            } else {
+                scene_select_frame(prev);
+                SurfacePoint xk = surface_point(x.prim, x.bary);
+                ShadowRay sr = shadow_ray_between(lens_point, vec3(0.0), xk.p, xk.ng);
+                o = sr.o;
+                d = sr.d;
+                tmax = sr.tmax;
+            }
+            scene_select_frame(prev);
+            Hit hit;
+            atomicAdd(shift_rays, 1u);
+            bool found = bvh_traverse(o, d, 0.0, tmax, BVH_MASK_ALL, !copy, hit);
+            scene_select_frame(false);
+            if (copy) {
+                x.prim = hit.prim;
+                x.bary = hit.bary;
+                x.valid = found;
+            } else {
+                x.valid = !found;
+            }
+        }
+        if (j == JOB_CANONICAL_PRIMARY || j == JOB_BACKUP_HERE) {
+            // Footprints here, for the reverse splat that follows.
+            if (x.valid) {
+                SurfacePoint xc = surface_point(x.prim, x.bary);
+                FilmProjection fp;
+                x.valid = splat_project(scene_info.camera_open, s.film_lens.zw, xc.p, xc.ng, fs, fp);
+                if (j == JOB_CANONICAL_PRIMARY) {
+                    x_canonical = x;
+                    fp_canonical = fp;
+                    area_canonical = xc.area;
+                } else {
+                    x_backup = x;
+                    fp_backup = fp;
+                    area_backup = xc.area;
+                    s_backup = s;
+                    s_backup.film_lens.xy = rb.s.film_lens.xy;
+                }
+            }
+            if (!shift) continue;
+        }
+        vec3 F = vec3(0.0);
+        if (x.valid && !restir_crosses_moved_suffix(s, reject_moved)) {
+            PrimaryHit dst;
+            dst.camera = vec4(lens_point, 1.0);
+            dst.hit = uvec4(x.prim, floatBitsToUint(x.bary), 0u);
+            scene_select_frame(prev);
+            F = restir_shift(cfg, s, dst);
+            scene_select_frame(false);
+        }
+        float t = luminance(F);
+        if (j == JOB_CANONICAL_REVERSE || j == JOB_BACKUP_REVERSE) {
+            float Jr = splat_jacobian(from, area_from, to, area_to);
+            uvec2 rp = min(uvec2(floor(to.film)), fs - 1u);
+            float c = half_prior * min(reservoirs_prev[rp.y * fs.x + rp.x].M, cap);
+            if (!(Jr > 0.0) || isinf(Jr)) t = 0.0;
+            if (j == JOB_CANONICAL_REVERSE) {
+                t_rev = t;
+                J_rev = Jr;
+                c_r = c;
+                if (t > 0.0) atomicAdd(splat_reverse_success, 1u);
+            } else {
+                t_backup_rev = t;
+                J_backup_rev = Jr;
+                c_backup_r = c;
+            }
+        } else if (j == JOB_CANONICAL_BACKUP) {
+            t_canonical_backup = t;
+        } else if (j == JOB_BACKUP_HERE) {
+            F_backup = F;
+        } else if (splat_here) {
+            F_splat = F;
+            if (backup) continue;  // its backup term comes next
+        }
+        if (j >= JOB_SPLATS) {
+            // Resample the splat (Eq. 11) once its backup term is known.
+            float t_copy = splat_here ? 0.0 : t;
+            atomicAdd(splat_resampled, 1u);
+            PathReservoir rq = reservoirs_prev[src];
+            float c_i = half_prior * min(rq.M, cap), t_here = luminance(F_splat);
+            float J = splat_records[src].J;
+            c_splats += min(rq.M, cap);
+            float m = splat_mis_prior(c_i, rq.target, Mc, t_here, J, 0.5 * c_b * t_copy);
+            reservoir_add(r, s_splat, F_splat, t_here, m * t_here * rq.W * J, rng_next(rng));
+        }
     }
-    float m_c = pc.ablation == ABLATION_NO_REVERSE_SPLAT
-                    ? 1.0
-                    : splat_mis_canonical(Mc, rc.target, c_r, t_rev, J_rev);
+    if (rc.W > 0.0) atomicAdd(splat_reverse_attempts, 1u);
+    if (backup && rb.W > 0.0) {
+        atomicAdd(splat_backup_attempts, 1u);
+        float t_here = luminance(F_backup);
+        float m = splat_mis_backup(0.5 * c_b, rb.target, Mc, t_here, c_backup_r, t_backup_rev,
+                                   J_backup_rev);
+        reservoir_add(r, s_backup, F_backup, t_here, m * t_here * rb.W, rng_next(rng));
+        if (t_here > 0.0) atomicAdd(splat_backup_success, 1u);
+    }
+    float m_c = splat_mis_canonical(Mc, rc.target, c_r,
+                                    pc.ablation == ABLATION_NO_REVERSE_SPLAT ? 0.0 : t_rev, J_rev,
+                                    0.5 * c_b * t_canonical_backup);
     reservoir_add(r, rc.s, rc.F, rc.target, m_c * rc.target * rc.W, rng_next(rng));
 
-    // Confidence (Eq. 17): the canonical's plus the previous confidences bilinearly interpolated
-    // at this pixel centre's back-projection (taps of dissimilar surfaces count 0), capped. Summing
-    // the splats' confidences instead (ablation) makes the confidence depend on where the
-    // previous samples landed, which is biased.
-    float M_prev = 0.0;
+    // Confidence (Eq. 17): the canonical's (and the backup's) plus the previous confidences
+    // bilinearly interpolated at this pixel centre's back-projection (taps of dissimilar surfaces
+    // count 0), capped. Summing the splats' confidences instead (ablation) makes the confidence
+    // depend on where the previous samples landed, which is biased.
+    float M_prev = c_b;
     if (pc.ablation == ABLATION_SUM_SPLAT_CONFIDENCES) {
-        M_prev = c_splats;
+        M_prev += c_splats;
     } else {
-        PrimaryHit hc = primary_in[idx];
-        vec2 base = vec2(pixel) + imageLoad(motionImage, ivec2(pixel)).xy;
+        vec2 base = vec2(pixel) + motion;
         ivec2 q0 = ivec2(floor(base));
         vec2 f = base - vec2(q0);
         for (uint i = 0u; i < 4u; ++i) {

@@ -5,7 +5,8 @@
 // back here. Checks: T(T^-1(Y)) = Y, J(T^-1 Y) J_rev(Y) = 1, J against central differences of
 // the film map previous -> here (the previous sample's primary ray traced again at perturbed
 // film positions), the projection matching camera_ray, and the MIS partition of unity
-// m_canonical(Y) + m_splat(T^-1 Y) = 1 for random confidences and targets.
+// m_canonical(Y) + m_splat(T^-1 Y) [+ m_backup] = 1 for random confidences and targets, without
+// and with the backup technique.
 #include "lib/bvh.glsl"
 #include "lib/camera.glsl"
 #include "lib/rng.glsl"
@@ -91,8 +92,14 @@ void main() {
     }
     float c_cur = 1.0 + 19.0 * rng_next(rng), c_r = 1.0 + 19.0 * rng_next(rng);
     float t_cur = exp(4.0 * rng_next(rng) - 2.0), t_prev = exp(4.0 * rng_next(rng) - 2.0);
-    float m_sum = splat_mis_canonical(c_cur, t_cur, c_r, t_prev, J_rev) +
-                  splat_mis_prior(c_r, t_prev, c_cur, t_cur, J);
+    float c_b = 1.0 + 19.0 * rng_next(rng), t_b = exp(4.0 * rng_next(rng) - 2.0);
+    // Without a backup (scatter), and with one (scatter_backup: three techniques).
+    float m2 = splat_mis_canonical(c_cur, t_cur, c_r, t_prev, J_rev, 0.0) +
+               splat_mis_prior(c_r, t_prev, c_cur, t_cur, J, 0.0);
+    float m3 = splat_mis_canonical(c_cur, t_cur, c_r, t_prev, J_rev, c_b * t_b) +
+               splat_mis_prior(c_r, t_prev, c_cur, t_cur, J, c_b * t_b) +
+               splat_mis_backup(c_b, t_b, c_cur, t_cur, c_r, t_prev, J_rev);
+    float m_sum = 1.0 + max(abs(m2 - 1.0), abs(m3 - 1.0));
     imageStore(resultImage, ivec2(pixel),
                vec4(length(film_back - film), abs(J * J_rev - 1.0),
                     J_fd < 0.0 ? -1.0 : abs(J_fd / J - 1.0), abs(m_sum - 1.0)));

@@ -7,7 +7,6 @@
 #define LOOM_RESTIR_SPLAT_GLSL
 
 #include "lib/camera.glsl"
-#include "lib/mis.glsl"
 #include "lib/sampling.glsl"
 #include "lib/scene.glsl"
 
@@ -70,20 +69,34 @@ float splat_jacobian(FilmProjection from, float area_from, FilmProjection to, fl
     return den > 0.0 ? to.footprint * area_to / den : 0.0;
 }
 
-// MIS weight of a prior-frame sample x_i splatted to Y = T(x_i) (Eq. 11): the generalized
-// balance heuristic of the prior pixel's technique (confidence c_i, target t_prev = p_hat_i(x_i))
-// pulled back into this domain by J = |dY / dx_i|, against the canonical technique (c_cur,
-// t_cur = p_hat(Y)).
-float splat_mis_prior(float c_i, float t_prev, float c_cur, float t_cur, float J) {
-    return mis_balance2(c_i, t_prev, c_cur, t_cur * J);
+// MIS (Eq. 11, 13) by the generalized balance heuristic over the techniques that can produce a
+// path y at this pixel: the canonical one (confidence c_cur, target p_hat(y)), the prior frame's
+// pixel y's reverse splat lands in (c_r, its target of T^-1(y), times J_rev = |dT^-1 / dy|) and,
+// with a backup (scatter_backup), the backup pixel through the lens-vertex copy (Jacobian 1). Each
+// term is confidence times target pulled back into this domain; with a backup, the scatter and
+// backup confidences are halved by the caller (the prior frame would otherwise count twice).
+
+// A prior-frame sample x_i splatted to Y = T(x_i) (Eq. 11), J = |dY / dx_i|: its own term is
+// c_i t_prev / J; backup_term = c_b p_hat_b(copy of Y into the backup pixel), 0 without one.
+float splat_mis_prior(float c_i, float t_prev, float c_cur, float t_cur, float J, float backup_term) {
+    float own = c_i * t_prev, den = own + (c_cur * t_cur + backup_term) * J;
+    return den > 0.0 ? own / den : 0.0;
 }
 
-// MIS weight of the canonical sample Y* (Eq. 13) against the prior pixel its reverse splat
-// T^-1(Y*) lands in (confidence c_r there, target t_rev, J_rev = |dT^-1 / dY*|). t_rev = 0
-// when the reverse splat fails (off the previous film, occluded, or the path cannot shift).
-// With J_rev(T x) = 1 / J(x): splat_mis_canonical(T x) + splat_mis_prior(x) = 1.
-float splat_mis_canonical(float c_cur, float t_cur, float c_r, float t_rev, float J_rev) {
-    return mis_balance2(c_cur, t_cur, c_r, t_rev * J_rev);
+// The canonical sample Y* (Eq. 13): t_rev = 0 when its reverse splat fails (off the previous
+// film, occluded there, or the path cannot shift).
+float splat_mis_canonical(float c_cur, float t_cur, float c_r, float t_rev, float J_rev,
+                          float backup_term) {
+    float own = c_cur * t_cur, den = own + c_r * t_rev * J_rev + backup_term;
+    return den > 0.0 ? own / den : 0.0;
+}
+
+// The backup sample Y_b, copied from the backup pixel (own target t_b_prev there): against the
+// canonical technique (t_cur = p_hat(Y_b)) and the prior pixel Y_b's reverse splat lands in.
+float splat_mis_backup(float c_b, float t_b_prev, float c_cur, float t_cur, float c_r, float t_rev,
+                       float J_rev) {
+    float own = c_b * t_b_prev, den = own + c_cur * t_cur + c_r * t_rev * J_rev;
+    return den > 0.0 ? own / den : 0.0;
 }
 
 #endif
