@@ -35,7 +35,8 @@
 -- one's rays would buy (relMSE ~ 1/spp), a proxy for GPU time where BVH traversal dominates.
 --
 -- Arguments: scenes (comma list; missing files are skipped), cameras (static,still,moving), width,
--- height, budget_ms, steps, move_frames, move_degrees, repeats, seed, ref_frames, ref_spp,
+-- height, budget_ms, steps, move_frames, move_degrees, move (swing, dolly), move_dolly,
+-- move_zoom, repeats, seed, ref_frames, ref_spp,
 -- ref_bounces (the estimators' maxBounces, 9), trim, configs, out. Scenes are looked up as
 -- given, then in the Loom source tree (so ../shared/scenes/... works from the repository root).
 -- Writes OUT/restir_equal_time.csv (every step), OUT/<scene>_static.png/.svg (relMSE vs GPU
@@ -47,6 +48,10 @@ local budget = loom.arg("budget_ms", 4000.0)
 local steps = loom.arg("steps", 5)
 local move_frames = loom.arg("move_frames", 16)
 local move_degrees = loom.arg("move_degrees", 10.0)
+-- swing: rotate about the target; dolly: also move in towards the target (the last
+-- move_dolly of the distance, forward motion opens holes) and zoom in (fov from move_zoom x fov).
+local move = loom.arg("move", "swing")
+local move_dolly, move_zoom = loom.arg("move_dolly", 0.15), loom.arg("move_zoom", 1.15)
 local repeats = loom.arg("repeats", 2)
 local seed = loom.arg("seed", 1)
 local out = loom.arg("out", "out/restir_equal_time")
@@ -95,7 +100,8 @@ local function renderer(cfg, scene, extra)
 end
 
 -- Keyframes that swing the camera `move_degrees` about its target (up axis) and end on the
--- scene camera at time move_frames - 1.
+-- scene camera at time move_frames - 1 (move = dolly: starting move_dolly further back and
+-- with move_zoom times the field of view).
 local function swing_path(cam, path)
   local o, t, u = cam.origin, cam.target, cam.up
   local len = math.sqrt(u[1] ^ 2 + u[2] ^ 2 + u[3] ^ 2)
@@ -108,9 +114,11 @@ local function swing_path(cam, path)
     local kxv = {k[2] * v[3] - k[3] * v[2], k[3] * v[1] - k[1] * v[3], k[1] * v[2] - k[2] * v[1]}
     local kdv = k[1] * v[1] + k[2] * v[2] + k[3] * v[3]
     local origin = {}
-    for j = 1, 3 do origin[j] = t[j] + v[j] * c + kxv[j] * s + k[j] * kdv * (1 - c) end
+    local back = (move == "dolly" and i == 1) and 1 + move_dolly or 1
+    for j = 1, 3 do origin[j] = t[j] + back * (v[j] * c + kxv[j] * s + k[j] * kdv * (1 - c)) end
+    local fov = (move == "dolly" and i == 1) and math.min(170, cam.fov * move_zoom) or cam.fov
     keys[i] = {time = (i - 1) * (move_frames - 1), origin = origin, target = t, up = u,
-               fov = cam.fov}
+               fov = fov}
   end
   loom.write_json(path, keys)
 end

@@ -227,3 +227,23 @@ TEST(ReservoirSplat, GatherModeIsAreaReSTIR) {
         EXPECT_EQ(img[0].pixels, img[1].pixels);
     }
 }
+
+// A deeper check than CI's (skipped unless LOOM_SPLAT_DEEP=N sequences): graph(s) in
+// LOOM_SPLAT_GRAPHS (default splat.json,splat_backup.json) on the moving Cornell box.
+TEST(ReservoirSplat, DeepCheck) {
+    const char* e = std::getenv("LOOM_SPLAT_DEEP");
+    if (!e) GTEST_SKIP() << "set LOOM_SPLAT_DEEP=<sequences>";
+    std::string graphs = std::getenv("LOOM_SPLAT_GRAPHS") ? std::getenv("LOOM_SPLAT_GRAPHS")
+                                                          : "splat.json,splat_backup.json";
+    scene::Scene s = scene::loadScene(sourcePath("scenes/cornell_box.json"));
+    size_t start = 0;
+    while (start < graphs.size()) {
+        size_t end = graphs.find(',', start);
+        std::string g =
+            graphs.substr(start, end == std::string::npos ? std::string::npos : end - start);
+        auto c = compareWithReference(s, g, {}, 3.0f, 32, std::atoi(e));
+        EXPECT_TRUE(c.unbiased()) << g;
+        if (end == std::string::npos) break;
+        start = end + 1;
+    }
+}

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Reservoir splatting (Liu et al. 2025, Fig. 7): Area ReSTIR fast and robust (gather) against
+# splat and splat + backup (scatter), under camera motion, against a high-spp path-traced
+# reference: the last single frame of a MOVE_FRAMES-frame dolly (the camera moves in towards
+# its target, turns and zooms, ending on the scene camera), MAPE and relMSE averaged over REPEATS
+# seeds, ms per frame, and the error ratio scaled to equal time. Scenes: scenes/fine_geometry.json
+# (thin geometry, the paper's foliage/hair stand-in) and, when ../shared/scenes is there, the
+# staircase (the paper's wooden staircase). Then the GPU ms of each stage at 256x256.
+# Prints tables; never asserts. BUILD defaults to build-bench.
+#
+#   bash bench/splat_equal_time.sh                       # 128x128, 8 repeats
+#   WIDTH=64 HEIGHT=64 REPEATS=2 STAGE=128 bash bench/splat_equal_time.sh   # quicker
+# OUT (default out/splat_equal_time) takes the tables' CSVs and images; STAGE is the stage-timing size.
+source "$(dirname "$0")/lib.sh"
+uptime
+OUT="${OUT:-out/splat_equal_time}"
+STAGE="${STAGE:-256}"
+# Motion per scene (the camera swings about its look-at point, a scene-dependent distance away).
+run() {
+    "$LOOM" run scripts/restir_equal_time.lua configs=bench/data/splat_configs.json scenes="$1" \
+        cameras=moving move=dolly move_degrees="$2" move_dolly="$3" move_frames="${MOVE_FRAMES:-16}" \
+        width="${WIDTH:-128}" height="${HEIGHT:-128}" budget_ms=1 steps=1 repeats="${REPEATS:-8}" \
+        ref_frames="${REF_FRAMES:-32}" ref_spp=64 out="$OUT/$4"
+}
+scenes=scenes/fine_geometry.json
+run scenes/fine_geometry.json 8 0.15 fine_geometry
+stairs=../shared/scenes/staircase2-modern-hall/scene.xml
+if [ -e "$stairs" ]; then
+    scenes="$scenes $stairs"
+    run "$stairs" 2 0.04 staircase  # its look-at point is 13 units away: 2 degrees move it 0.45
+fi
+for scene in $scenes; do
+    for mode in gather scatter scatter_backup; do
+        echo "== $mode, $scene, ${STAGE}x${STAGE} (GPU ms averaged over frames 2-5)"
+        "$LOOM" render graphs/splat.json --scene "$scene" --width "$STAGE" --height "$STAGE" --frames 5 \
+            --set temporal.mode=$mode --timings --quiet --out "$OUT/stages_$mode.png" | sed "/^resource/,\$d"
+    done
+done
+uptime
