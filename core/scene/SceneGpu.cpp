@@ -40,7 +40,7 @@ struct CameraPoseGpu {
     glm::vec4 origin, target, up, lens;
 };
 struct SceneInfoGpu {
-    CameraPoseGpu open, close, prev;
+    CameraPoseGpu open, close, prev, prevClose;  // prev*: the previous frame's shutter open / close
     glm::uvec4 counts;
     glm::vec4 boundsCenter;
     // Where the previous frame's geometry is: vertex base, BVH node base, BVH triangle base
@@ -48,7 +48,7 @@ struct SceneInfoGpu {
     glm::uvec4 previousGeometry{0u};
 };
 static_assert(sizeof(VertexGpu) == 32 && sizeof(ShapeGpu) == 32 && sizeof(TextureGpu) == 64 &&
-              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 3 * 64 + 48);
+              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 4 * 64 + 48);
 
 enum : uint32_t {
     kLightTriangle,
@@ -485,6 +485,7 @@ void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
         // this geometry).
         if (mPreviousDiffers) {
             info.prev = info.open;
+            info.prevClose = info.close;
             settleShapes();
             mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
             mPreviousDiffers = false;
@@ -493,11 +494,13 @@ void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
     }
     mPreviousDiffers = true;
     const Camera& c = mScene.camera;
-    CameraPoseGpu prev = mTime < 0.0f ? poseAt(c, time + c.shutterOpen, width, height) : info.open;
+    CameraPoseGpu prev = info.open, prevClose = info.close;
     info.open = poseAt(c, time + c.shutterOpen, width, height);
     info.close = poseAt(c, time + c.shutterClose, width, height);
-    // Previous frame's pose: the last uploaded open pose (same pose on the first frame).
-    info.prev = (mTime < 0.0f || width != mWidth || height != mHeight) ? info.open : prev;
+    // Previous frame's poses: the last uploaded ones (this frame's on the first frame).
+    bool first = mTime < 0.0f || width != mWidth || height != mHeight;
+    info.prev = first ? info.open : prev;
+    info.prevClose = first ? info.close : prevClose;
     if (time != mTime) updateShapes(time + c.shutterOpen, mTime < 0.0f);
     mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
     if (time != mTime || mCameraDirty) ++mRevision;

@@ -38,6 +38,16 @@ CameraFrame camera_frame(CameraPose a, CameraPose b, float s) {
     return c;
 }
 
+// The pose a fraction s of the way from a to b: camera_frame(camera_pose_at(a, b, s), ., 0)
+// equals camera_frame(a, b, s) (lens from a).
+CameraPose camera_pose_at(CameraPose a, CameraPose b, float s) {
+    CameraPose p = a;
+    p.origin = mix(a.origin, b.origin, s);
+    p.target = mix(a.target, b.target, s);
+    p.up.xyz = mix(a.up.xyz, b.up.xyz, s);
+    return p;
+}
+
 // Primary ray through film position uv in [0,1]^2 (top-left origin) with lens sample u_lens.
 void camera_ray(CameraFrame c, vec2 uv, vec2 u_lens, out vec3 origin, out vec3 dir) {
     vec3 d_cam = vec3((1.0 - 2.0 * uv.x) * c.tan_half_fov.x, (1.0 - 2.0 * uv.y) * c.tan_half_fov.y, 1.0);

@@ -58,6 +58,7 @@ struct SceneInfo {
     CameraPose camera_open;   // this frame, shutter open
     CameraPose camera_close;  // this frame, shutter close
     CameraPose camera_prev;   // previous frame (shutter open)
+    CameraPose camera_prev_close;  // previous frame (shutter close)
     uvec4 counts;             // triangles, shapes, lights, environment light index (~0u: none)
     vec4 bounds_center;       // xyz, w = bounding-sphere radius
     // The previous frame's geometry (moving shapes): base of its vertices in scene_vertices,
