@@ -40,6 +40,12 @@ public:
             .doc(
                 "path: the primary hit is fixed per pixel (ReSTIR PT); area: film and lens "
                 "samples are part of the sample and are reused too (Area ReSTIR)");
+        r.param("motionBlur", false)
+            .doc(
+                "reuse = area: each candidate also samples a shutter time (PathTracer's uniform "
+                "shutter fraction) that belongs to the sample: camera motion blur, shapes at "
+                "shutter "
+                "open (pair with GBuffer.motionBlur = true for the directly seen emission)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = compileKernel(*this, shaders, "passes/restir_pt/initial.comp");

@@ -39,6 +39,7 @@ layout(push_constant) uniform Params {
     uint misHeuristic;
     uint reuse;  // REUSE_PATH, REUSE_AREA
     uint rrDepth;
+    uint motionBlur;
 } pc;
 
 void main() {
@@ -52,7 +53,7 @@ void main() {
     cfg.dist_threshold = pc.distanceThreshold;
     cfg.frame_size = pc.frameSize;
     cfg.mis_heuristic = pc.misHeuristic;
-    cfg.area = uint(pc.reuse == REUSE_AREA);
+    cfg.area = pc.reuse == REUSE_AREA ? RESTIR_AREA | (pc.motionBlur != 0u ? RESTIR_AREA_TIME : 0u) : 0u;
     if (idx == 0u) settings_out = cfg;
 
     // The camera vertex of the GBuffer's primary ray (same film and lens sample, shutter open).
@@ -77,12 +78,17 @@ void main() {
             uvec4 seed = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x9E3779B1u * (c + 1u))).state;
             vec4 film_lens = smp;
             PrimaryHit cph = ph;
+            PathSample cs;
+            cs.time = 0.0;
             if (pc.reuse == REUSE_AREA) {
                 film_lens = vec4(rng_next2(rng_film), rng_next2(rng_film));
-                cph = restir_trace_primary(scene_info.camera_open, ivec2(pixel), film_lens, pc.frameSize);
+                // Motion blur: a shutter time per candidate (PathTracer's uniform shutter fraction).
+                if (restir_has_time(cfg)) cs.time = rng_next(rng_film);
+                cph = restir_trace_primary(restir_sample_pose(cfg, cs, false), ivec2(pixel), film_lens,
+                                           pc.frameSize);
                 ++rays;
             }
-            rays += restir_generate(cfg, cph, seed, film_lens, inv, pc.rrDepth, r, rng_sel);
+            rays += restir_generate(cfg, cph, seed, film_lens, cs.time, inv, pc.rrDepth, r, rng_sel);
         }
         r.M = float(pc.candidates);
     }

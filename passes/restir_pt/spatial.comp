@@ -66,13 +66,12 @@ void main() {
         return;
     }
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x5BD1E995u * (pc.round + 1u)));
-    CameraPose pose = scene_info.camera_open;
     bool balance = pc.mis == MIS_BALANCE;
     // Techniques: each valid neighbour with each shift mapping (the replayed/copied film and lens
     // sample; with Area ReSTIR under a thin lens also primary-hit reconnection, each then with
     // half the neighbour's confidence). The balance heuristic uses the copy shift only.
     uint shifts = SHIFT_COPY;
-    if (!balance && cfg.area != 0u && pose.up.w > 0.0) shifts = dof_shift_mask(pc.dofShift);
+    if (!balance && cfg.area != 0u && scene_info.camera_open.up.w > 0.0) shifts = dof_shift_mask(pc.dofShift);
     float n_shifts = float(bitCount(shifts));
     ivec2 tq[MAX_TECHNIQUES];
     uint tshift[MAX_TECHNIQUES];
@@ -121,6 +120,8 @@ void main() {
         bool copy = tshift[tech] == SHIFT_COPY;
         // Copy: replay the film/lens sample in the destination. Reconnection: the source
         // domain's primary hit, kept, with the lens point solved for in the destination.
+        // Motion blur: the shutter time is copied with the film and lens sample (Jacobian 1).
+        CameraPose pose = restir_sample_pose(cfg, s_src, false);
         PrimaryHit base = restir_domain_primary(cfg, s_src, copy ? h_dst : h_src, copy ? q_dst : q_src, pose);
         PathSample s_dst = s_src;
         PrimaryHit dst = base;

@@ -104,7 +104,11 @@ ShiftJob shift_job(PathSample s, ivec2 src_q, uint src_prev, ivec2 dst_q, uint d
     return j;
 }
 
-CameraPose pose_of(uint prev) { return prev != 0u ? scene_info.camera_prev : scene_info.camera_open; }
+// The camera the sample sees in a frame (with motion blur, at its shutter time: copied by every
+// temporal shift, so a gathered previous sample keeps its shutter fraction).
+CameraPose pose_of(RestirSettings cfg, PathSample s, uint prev) {
+    return restir_sample_pose(cfg, s, prev != 0u);
+}
 PrimaryHit primary_of(uint prev, ivec2 q) {
     return prev != 0u ? primary_prev[pixel_index(q)] : primary_in[pixel_index(q)];
 }
@@ -240,7 +244,7 @@ void main() {
         ShiftJob job = jobs[j];
         PathSample s_dst = job.s;
         s_dst.film_lens.xy = job.dst_off;
-        CameraPose dst_pose = pose_of(job.dst_prev);
+        CameraPose dst_pose = pose_of(cfg, job.s, job.dst_prev);
         PrimaryHit dst;
         J[j] = 1.0;
         bool ok = !shift_crosses_moved_suffix(job.s);
@@ -252,7 +256,7 @@ void main() {
         } else {
             // Reconnection: the source domain's primary hit, kept, with the lens point solved for
             // in the destination.
-            CameraPose src_pose = pose_of(job.src_prev);
+            CameraPose src_pose = pose_of(cfg, job.s, job.src_prev);
             scene_select_frame(job.src_prev != 0u);
             PrimaryHit src = restir_domain_primary(cfg, job.s, primary_of(job.src_prev, job.src_q),
                                                    job.src_q, src_pose);

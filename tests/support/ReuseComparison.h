@@ -6,7 +6,7 @@
 // standard error. The comparison is against a path-traced reference rendered at the same frame
 // times, in luminance, on 2x2 regions (|z| < 3) and on 8x8 regions (4x4-pixel blocks at 32x32:
 // |z| < 4.5, Bonferroni for 64 comparisons; a bias confined to one block is diluted 16x in the
-// coarse regions).
+// coarse regions). motionBlur: the reference samples the shutter (PathTracer.motionBlur).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,15 +34,16 @@ inline std::unique_ptr<RenderGraph> restirGraph(const std::string& file,
     return g;
 }
 
-inline std::unique_ptr<RenderGraph> ptGraph(int spp, int maxBounces) {
-    json g = {{"name", "pt_reference"},
-              {"passes",
-               {{{"name", "pt"},
-                 {"type", "PathTracer"},
-                 {"params",
-                  {{"samplesPerPixel", spp}, {"maxBounces", maxBounces}, {"motionBlur", false}}}}}},
-              {"edges", json::array()},
-              {"outputs", {"pt.color"}}};
+inline std::unique_ptr<RenderGraph> ptGraph(int spp, int maxBounces, bool motionBlur = false) {
+    json g = {
+        {"name", "pt_reference"},
+        {"passes",
+         {{{"name", "pt"},
+           {"type", "PathTracer"},
+           {"params",
+            {{"samplesPerPixel", spp}, {"maxBounces", maxBounces}, {"motionBlur", motionBlur}}}}}},
+        {"edges", json::array()},
+        {"outputs", {"pt.color"}}};
     return RenderGraph::parse(g.dump(), "<test>");
 }
 
@@ -105,7 +106,8 @@ inline int defaultSequences() {
 
 inline Comparison compareWithReference(const scene::Scene& scene, const std::string& graphFile,
                                        const json& overrides, float dt, int size = 32,
-                                       int sequences = defaultSequences(), int frames = 8) {
+                                       int sequences = defaultSequences(), int frames = 8,
+                                       bool motionBlur = false) {
     Comparison c;
     std::pair<RegionStats, RegionStats> restir{RegionStats(1), RegionStats(1)}, reference = restir;
     {
@@ -114,7 +116,7 @@ inline Comparison compareWithReference(const scene::Scene& scene, const std::str
         restir = sequenceStats(r, "shade.color", sequences, frames, dt);
     }
     {
-        Renderer r(test::gpuContext(), ptGraph(8, 9), size, size, 2);
+        Renderer r(test::gpuContext(), ptGraph(8, 9, motionBlur), size, size, 2);
         r.setScene(scene);
         reference = sequenceStats(r, "pt.color", sequences, frames, dt);
     }

@@ -51,7 +51,7 @@ void restir_stream_candidate(inout PathReservoir r, inout Rng rng_sel, PathSampl
 // reconnection vertex x_k is behind: the suffix after x_k is never replayed (shifts keep its
 // directions and cached radiance), so a termination decision there is a sampling choice of
 // this pixel only; the prefix that shifts replay never depends on throughput.
-uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_lens,
+uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_lens, float time,
                      float inv_candidates, uint rr_depth, inout PathReservoir r, inout Rng rng_sel) {
     uint rays = 0u;
     if (!primary_valid(ph) || cfg.max_bounces == 0u) return rays;
@@ -69,7 +69,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
     g.suffix_f = vec3(1.0);
     PathSample s;
     s.seed = seed;
-    s.pad = 0.0;
+    s.time = time;
     s.film_lens = film_lens;
     for (uint j = 1u; j <= cfg.max_bounces; ++j) {
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);

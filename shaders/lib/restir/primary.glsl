@@ -24,6 +24,15 @@ PrimaryHit restir_trace_primary(CameraPose pose, ivec2 pixel, vec4 film_lens, uv
     return ph;
 }
 
+// The camera sample s sees in this frame (previous = false) or the previous one: the shutter-open
+// pose, or with motion blur (restir_has_time) the pose at the sample's shutter time.
+CameraPose restir_sample_pose(RestirSettings cfg, PathSample s, bool previous) {
+    CameraPose open = previous ? scene_info.camera_prev : scene_info.camera_open;
+    if (!restir_has_time(cfg)) return open;
+    return camera_pose_at(open, previous ? scene_info.camera_prev_close : scene_info.camera_close,
+                          s.time);
+}
+
 ShadingPoint restir_primary_shading(PrimaryHit ph) {
     Hit h;
     h.t = 0.0;

@@ -26,7 +26,14 @@ struct RestirSettings {
     uvec2 frame_size;
     uint mis_heuristic;      // NEE/BSDF MIS inside a path (MIS_HEURISTIC_*)
     uint area;               // Area ReSTIR: film and lens samples belong to the path sample
+                             // (RESTIR_AREA), and with RESTIR_AREA_TIME the shutter time too
 };
+
+const uint RESTIR_AREA = 1u;
+const uint RESTIR_AREA_TIME = 2u;
+
+// Whether samples carry a shutter time (camera motion blur).
+bool restir_has_time(RestirSettings cfg) { return (cfg.area & RESTIR_AREA_TIME) != 0u; }
 
 // A path x1 .. xn after the camera vertex x0 (x1 = the pixel's primary hit, n >= 2). Vertex xj
 // uses the random numbers of counters 4j+1 .. 4j+4 of the replay stream `seed`.
@@ -42,7 +49,7 @@ struct PathSample {
     vec3 rc_dir;      // k < n: direction x_k -> x_{k+1}; RC_DIRECTION: direction to the light
     float light_pdf;  // k == n-1: light-sampling pdf (solid angle at x_k) of x_n, for MIS
     vec3 rc_Lo;       // f products after x_k times Le (times the last MIS weight when k < n-1)
-    float pad;
+    float time;       // Area ReSTIR with motion blur: shutter fraction in [0,1) of the camera ray
     vec4 film_lens;   // Area ReSTIR: subpixel offset xy in [0,1)^2, lens sample zw
 };
 
@@ -82,7 +89,7 @@ PathReservoir reservoir_empty() {
     r.s.rc_dir = vec3(0.0);
     r.s.light_pdf = 0.0;
     r.s.rc_Lo = vec3(0.0);
-    r.s.pad = 0.0;
+    r.s.time = 0.0;
     r.s.film_lens = vec4(0.5, 0.5, 0.5, 0.5);
     r.F = vec3(0.0);
     r.W = 0.0;
