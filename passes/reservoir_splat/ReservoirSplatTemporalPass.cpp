@@ -28,6 +28,7 @@ enum SplatCounter : size_t {
     kSplatCounters
 };
 constexpr uint64_t kSplatRecordBytes = 32;
+constexpr int kMaxTimePartitions = 4;  // MAX_TIME_PARTITIONS, splat_buffers.glsl
 
 }  // namespace
 
@@ -35,27 +36,35 @@ class ReservoirSplatTemporalPass : public Pass {
 public:
     void reflect(PassReflection& r) const override {
         restir::reflectTemporalReuse(r);
-        r.paramEnum("mode", "scatter", {"gather", "scatter", "scatter_backup"})
+        r.paramEnum("mode", "scatter", {"gather", "scatter", "scatter_backup", "multi_scatter"})
             .doc(
                 "gather: Area ReSTIR's backprojection (ReSTIRPTTemporal, areaReprojection fast or "
                 "robust); scatter: every previous sample is forward-projected with its primary hit "
                 "kept and resampled where it lands (Liu et al. 2025); scatter_backup: also the "
-                "previous pixel at the rounded motion vector by lens-vertex copy, 3-term MIS");
-        r.paramEnum("ablation", "none", {"none", "sumSplatConfidences", "noReverseSplat"})
+                "previous pixel at the rounded motion vector by lens-vertex copy, 3-term MIS; "
+                "multi_scatter: motion blur, every previous sample splatted once per time "
+                "partition (Sec. 4.4; needs ReSTIRPTInitial.motionBlur)");
+        r.param("timePartitions", 2)
+            .range(1, kMaxTimePartitions)
+            .doc(
+                "multi_scatter: K, the shutter split into K partitions, each receiving the whole "
+                "previous shutter squeezed by 1/K");
+        r.paramEnum("ablation", "none",
+                    {"none", "sumSplatConfidences", "noReverseSplat", "noTimeJacobian"})
             .doc(
                 "scatter, biased on purpose for the tests: sum the landed splats' confidences "
-                "instead of Eq. 17's bilinear one, or drop the canonical sample's reverse-splat "
-                "MIS "
-                "term");
+                "instead of Eq. 17's bilinear one, drop the canonical sample's reverse-splat MIS "
+                "term, or drop multi_scatter's 1/K time Jacobian");
         r.scratchBuffer("records")
-            .bytesPerPixel(kSplatRecordBytes)
+            .bytesPerPixel(kSplatRecordBytes * kMaxTimePartitions)
             .doc(
                 "scatter: per previous pixel, where its sample landed (pixel, offset, x1, "
                 "Jacobian)");
         r.scratchBuffer("ranges").bytesPerPixel(8).doc(
             "scatter: per pixel, splats landed and the start of its index-list range");
-        r.scratchBuffer("lists").bytesPerPixel(4).doc(
-            "scatter: source pixels of the splats, grouped by destination");
+        r.scratchBuffer("lists")
+            .bytesPerPixel(4 * kMaxTimePartitions)
+            .doc("scatter: source pixels of the splats, grouped by destination");
     }
     void compile(ShaderLibrary& shaders) override {
         mGather = compileKernel(*this, shaders, "passes/restir_pt/temporal.comp");

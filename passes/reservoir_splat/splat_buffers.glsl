@@ -19,12 +19,16 @@ struct SplatRecord {
     vec2 bary;
 };
 
+// Records per previous pixel: one per multi-splat time partition (ReservoirSplatTemporal's
+// timePartitions is at most this); record index = pixel * MAX_TIME_PARTITIONS + partition.
+const uint MAX_TIME_PARTITIONS = 4u;
+
 layout(std430) buffer SplatRecords { SplatRecord splat_records[]; };
 layout(std430) buffer SplatRanges { uvec2 splat_ranges[]; };  // x count, y first list index
-layout(std430) buffer SplatLists { uint splat_lists[]; };     // source (previous) pixel indices
+layout(std430) buffer SplatLists { uint splat_lists[]; };     // source record indices
 
 layout(std430) buffer SplatCounters {
-    uint splat_sources;         // previous pixels with a sample
+    uint splat_sources;         // splats attempted: previous samples (times the time partitions)
     uint splat_landed;
     uint splat_occluded;
     uint splat_off_screen;      // behind the camera or off the film

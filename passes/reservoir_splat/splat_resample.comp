@@ -42,6 +42,7 @@ layout(push_constant) uniform Params {
     float depthThreshold;
     uint movingSuffix;
     uint mode;
+    uint timePartitions;
     uint ablation;
 } pc;
 
@@ -86,6 +87,9 @@ void main() {
     uvec2 fs = pc.frameSize;
     PrimaryHit hc = primary_in[idx];
     vec2 motion = imageLoad(motionImage, ivec2(pixel)).xy;
+    // Multi-splat time partitions (Sec. 4.4), for samples that carry a time.
+    uint K = pc.mode == MODE_MULTI_SCATTER && restir_has_time(cfg) ? pc.timePartitions : 1u;
+    float time_jacobian = pc.ablation == ABLATION_NO_TIME_JACOBIAN ? 1.0 : float(K);
 
     // The backup technique (scatter_backup): the previous pixel at the rounded motion vector,
     // when its surface is similar to this pixel's (a choice independent of the samples).
@@ -166,8 +170,9 @@ void main() {
             }
             last_src = src;
             SplatRecord rec = splat_records[src];
-            s = reservoirs_prev[src].s;
+            s = reservoirs_prev[src / MAX_TIME_PARTITIONS].s;
             s.film_lens.xy = rec.dst_off;
+            s.time = splat_time_forward(s.time, src % MAX_TIME_PARTITIONS, K);
             s_splat = s;
             prev = false;
             copy = false;
@@ -188,7 +193,8 @@ void main() {
             SurfacePoint xp = surface_point(x.prim, x.bary);
             area_to = xp.area;
             scene_select_frame(false);
-            if (!splat_project(scene_info.camera_prev, s.film_lens.zw, xp.p, xp.ng, fs, to) ||
+            s.time = splat_time_backward(s.time, K);
+            if (!splat_project(restir_sample_pose(cfg, s, true), s.film_lens.zw, xp.p, xp.ng, fs, to) ||
                 !film_on_screen(to.film, fs))
                 continue;
             uvec2 rp = min(uvec2(floor(to.film)), fs - 1u);
@@ -197,7 +203,7 @@ void main() {
         }
         // x1: one traversal for every job (closest hit of a copied camera ray, or the kept x1's
         // visibility from the destination's lens point).
-        CameraPose pose = prev ? scene_info.camera_prev : scene_info.camera_open;
+        CameraPose pose = restir_sample_pose(cfg, s, prev);
         CameraFrame cam = camera_frame(pose, pose, 0.0);
         vec3 lens_point = camera_lens_point(cam, s.film_lens.zw);
         if (trace) {
@@ -231,7 +237,7 @@ void main() {
             if (x.valid) {
                 SurfacePoint xc = surface_point(x.prim, x.bary);
                 FilmProjection fp;
-                x.valid = splat_project(scene_info.camera_open, s.film_lens.zw, xc.p, xc.ng, fs, fp);
+                x.valid = splat_project(pose, s.film_lens.zw, xc.p, xc.ng, fs, fp);
                 if (j == JOB_CANONICAL_PRIMARY) {
                     x_canonical = x;
                     fp_canonical = fp;
@@ -257,7 +263,7 @@ void main() {
         }
         float t = luminance(F);
         if (j == JOB_CANONICAL_REVERSE || j == JOB_BACKUP_REVERSE) {
-            float Jr = splat_jacobian(from, area_from, to, area_to);
+            float Jr = splat_jacobian(from, area_from, to, area_to) * time_jacobian;
             uvec2 rp = min(uvec2(floor(to.film)), fs - 1u);
             float c = half_prior * min(reservoirs_prev[rp.y * fs.x + rp.x].M, cap);
             if (!(Jr > 0.0) || isinf(Jr)) t = 0.0;
@@ -283,7 +289,7 @@ void main() {
             // Resample the splat (Eq. 11) once its backup term is known.
             float t_copy = splat_here ? 0.0 : t;
             atomicAdd(splat_resampled, 1u);
-            PathReservoir rq = reservoirs_prev[src];
+            PathReservoir rq = reservoirs_prev[src / MAX_TIME_PARTITIONS];
             float c_i = half_prior * min(rq.M, cap), t_here = luminance(F_splat);
             float J = splat_records[src].J;
             c_splats += min(rq.M, cap);

@@ -69,6 +69,15 @@ float splat_jacobian(FilmProjection from, float area_from, FilmProjection to, fl
     return den > 0.0 ? to.footprint * area_to / den : 0.0;
 }
 
+// Multi-splatting (Sec. 4.4): with K time partitions, the previous sample at shutter fraction u
+// is splatted K times, to (n + u) / K in partition n = 0 .. K-1 (the previous shutter squeezed
+// into each 1/K of this one; |du' / du| = 1/K, a factor of the splat's Jacobian).
+float splat_time_forward(float u_prev, uint n, uint K) { return (float(n) + u_prev) / float(K); }
+uint splat_time_partition(float u, uint K) { return min(uint(u * float(K)), K - 1u); }
+float splat_time_backward(float u, uint K) {
+    return clamp(u * float(K) - float(splat_time_partition(u, K)), 0.0, 1.0 - 1e-7);
+}
+
 // MIS (Eq. 11, 13) by the generalized balance heuristic over the techniques that can produce a
 // path y at this pixel: the canonical one (confidence c_cur, target p_hat(y)), the prior frame's
 // pixel y's reverse splat lands in (c_r, its target of T^-1(y), times J_rev = |dT^-1 / dy|) and,
