@@ -946,6 +946,29 @@ int rSetTime(lua_State* L) {
     return 0;
 }
 
+// r:shutter() returns the camera's shutter interval (open, close) in frames after the frame
+// time; r:shutter(open, close) sets it (equal: no motion blur). Keeps the camera path.
+int rShutter(lua_State* L) {
+    Renderer& r = self(L, "shutter");
+    const std::string fn = "r:shutter";
+    auto& s = sceneOf(r, fn);
+    scene::Camera c = s.cpu().camera;
+    if (lua_isnoneornil(L, 2)) {
+        lua_pushnumber(L, c.shutterOpen);
+        lua_pushnumber(L, c.shutterClose);
+        return 2;
+    }
+    double open = argNumber(L, 2, fn, "the shutter open time (frames)");
+    double close = argNumber(L, 3, fn, "the shutter close time (frames)");
+    if (!std::isfinite(open) || !std::isfinite(close) || close < open)
+        throw ScriptError(fmt::format(
+            "{}: the shutter must be finite with open <= close, got ({}, {})", fn, open, close));
+    c.shutterOpen = float(open);
+    c.shutterClose = float(close);
+    s.setCamera(c);
+    return 0;
+}
+
 int rTime(lua_State* L) {
     lua_pushnumber(L, self(L, "time").time());
     return 1;
@@ -1573,6 +1596,7 @@ const luaL_Reg kRendererMethods[] = {{"frame", guarded<rFrame>},
                                      {"camera", guarded<rCamera>},
                                      {"camera_path", guarded<rCameraPath>},
                                      {"set_time", guarded<rSetTime>},
+                                     {"shutter", guarded<rShutter>},
                                      {"time", guarded<rTime>},
                                      {"image", guarded<rImage>},
                                      {"capture", guarded<rCapture>},

@@ -318,6 +318,11 @@ expect_error(function() r:camera_path(TMP .. "/none.json") end, "camera path fil
 expect_error(function() r:camera{origin = {0, 1}} end, "'origin' must be an array of 3 numbers")
 expect_error(function() r:camera{fov = 200} end, "'fov' must be in (0, 180)")
 expect_error(function() r:camera{eye = {0, 0, 0}} end, "unknown key 'eye'")
+r:shutter(0, 2)
+local so, sc = r:shutter()
+assert(so == 0 and sc == 2, "shutter set")
+assert(near(r:camera().origin[1], 1), "the shutter keeps the camera path")
+expect_error(function() r:shutter(1, 0) end, "open <= close")
 
 local h = loom.renderer{graph = "graphs/hello_compute.json", width = 8, height = 8}
 expect_error(function() h:camera() end, "has no scene")
