@@ -5,7 +5,8 @@
 # its target, turns and zooms, ending on the scene camera), MAPE and relMSE averaged over REPEATS
 # seeds, ms per frame, and the error ratio scaled to equal time. Scenes: scenes/fine_geometry.json
 # (thin geometry, the paper's foliage/hair stand-in) and, when ../shared/scenes is there, the
-# staircase (the paper's wooden staircase). Then the GPU ms of each stage at 256x256.
+# staircase (the paper's wooden staircase). Then motion blur: multi-splatting against the
+# naive backprojected baseline at a 4-frame shutter. Then the GPU ms of each stage at 256x256.
 # Prints tables; never asserts. BUILD defaults to build-bench.
 #
 #   bash bench/splat_equal_time.sh                       # 128x128, 8 repeats
@@ -16,23 +17,31 @@ uptime
 OUT="${OUT:-out/splat_equal_time}"
 STAGE="${STAGE:-256}"
 # Motion per scene (the camera swings about its look-at point, a scene-dependent distance away).
-run() {
-    "$LOOM" run scripts/restir_equal_time.lua configs=bench/data/splat_configs.json scenes="$1" \
-        cameras=moving move=dolly move_degrees="$2" move_dolly="$3" move_frames="${MOVE_FRAMES:-16}" \
+run() {  # scene, degrees, dolly, out name[, shutter]; MOVE_ZOOM: fov factor at the start
+    "$LOOM" run scripts/restir_equal_time.lua configs="${CONFIGS:-bench/data/splat_configs.json}" scenes="$1" \
+        cameras=moving move=dolly move_degrees="$2" move_dolly="$3" move_zoom="${MOVE_ZOOM:-1.15}" move_frames="${MOVE_FRAMES:-16}" \
         width="${WIDTH:-128}" height="${HEIGHT:-128}" budget_ms=1 steps=1 repeats="${REPEATS:-8}" \
-        ref_frames="${REF_FRAMES:-32}" ref_spp=64 out="$OUT/$4"
+        ref_frames="${REF_FRAMES:-32}" ref_spp=64 out="$OUT/$4" ${5:+shutter=$5}
 }
 scenes=scenes/fine_geometry.json
 run scenes/fine_geometry.json 8 0.15 fine_geometry
 stairs=../shared/scenes/staircase2-modern-hall/scene.xml
 if [ -e "$stairs" ]; then
     scenes="$scenes $stairs"
-    run "$stairs" 2 0.04 staircase  # its look-at point is 13 units away: 2 degrees move it 0.45
+    # Its look-at point is 13 units away (2 degrees move the camera 0.45), and a wall is just
+    # behind the camera: the dolly moves backwards and zooms out instead.
+    MOVE_ZOOM=0.9 run "$stairs" 2 -0.04 staircase
 fi
+# Motion blur (Sec. 4.4.1): multi-splatting against the naive backprojected baseline (gather
+# with the time copied), both with a 4-frame shutter of the dolly, against a blurred reference.
+CONFIGS=bench/data/splat_motion_blur_configs.json run scenes/fine_geometry.json 8 0.15 \
+    fine_geometry_motion_blur 0,4
 for scene in $scenes; do
-    for mode in gather scatter scatter_backup; do
+    for mode in gather scatter scatter_backup multi_scatter; do
+        graph=graphs/splat.json
+        [ $mode = multi_scatter ] && graph=graphs/splat_motion_blur.json
         echo "== $mode, $scene, ${STAGE}x${STAGE} (GPU ms averaged over frames 2-5)"
-        "$LOOM" render graphs/splat.json --scene "$scene" --width "$STAGE" --height "$STAGE" --frames 5 \
+        "$LOOM" render $graph --scene "$scene" --width "$STAGE" --height "$STAGE" --frames 5 \
             --set temporal.mode=$mode --timings --quiet --out "$OUT/stages_$mode.png" | sed "/^resource/,\$d"
     done
 done

@@ -36,7 +36,7 @@
 --
 -- Arguments: scenes (comma list; missing files are skipped), cameras (static,still,moving), width,
 -- height, budget_ms, steps, move_frames, move_degrees, move (swing, dolly), move_dolly,
--- move_zoom, repeats, seed, ref_frames, ref_spp,
+-- move_zoom, shutter, repeats, seed, ref_frames, ref_spp,
 -- ref_bounces (the estimators' maxBounces, 9), trim, configs, out. Scenes are looked up as
 -- given, then in the Loom source tree (so ../shared/scenes/... works from the repository root).
 -- Writes OUT/restir_equal_time.csv (every step), OUT/<scene>_static.png/.svg (relMSE vs GPU
@@ -52,6 +52,11 @@ local move_degrees = loom.arg("move_degrees", 10.0)
 -- move_dolly of the distance, forward motion opens holes) and zoom in (fov from move_zoom x fov).
 local move = loom.arg("move", "swing")
 local move_dolly, move_zoom = loom.arg("move_dolly", 0.15), loom.arg("move_zoom", 1.15)
+-- shutter=OPEN,CLOSE (frames): every renderer's camera shutter, and a reference that samples it
+-- (PathTracer's motionBlur, on by default): for estimators with motion blur.
+local shutter = loom.arg("shutter", {})
+if #shutter ~= 0 and #shutter ~= 2 then error("shutter: expected OPEN,CLOSE") end
+if #shutter == 0 then shutter = nil else shutter = {tonumber(shutter[1]), tonumber(shutter[2])} end
 local repeats = loom.arg("repeats", 2)
 local seed = loom.arg("seed", 1)
 local out = loom.arg("out", "out/restir_equal_time")
@@ -95,8 +100,10 @@ local function renderer(cfg, scene, extra)
   local params = {}
   for k, v in pairs(cfg.params or {}) do params[k] = v end
   for k, v in pairs(extra or {}) do params[k] = v end
-  return loom.renderer{graph = cfg.graph, scene = scene, width = width, height = height,
-                       seed = seed, params = params}
+  local r = loom.renderer{graph = cfg.graph, scene = scene, width = width, height = height,
+                          seed = seed, params = params}
+  if shutter then r:shutter(shutter[1], shutter[2]) end
+  return r
 end
 
 -- Keyframes that swing the camera `move_degrees` about its target (up axis) and end on the
@@ -133,11 +140,13 @@ for _, scene_arg in ipairs(scenes) do
   do
     local name = stem_of(scene)
     local ref = util.reference{scene = scene, width = width, height = height,
-                               frames = ref_frames, spp = ref_spp,
+                               frames = ref_frames, spp = ref_spp, shutter = shutter,
                                params = {["pt.maxBounces"] = ref_bounces},
-                               path = string.format("out/reference/%s_%dx%d_%dx%dspp_b%d.exr",
+                               path = string.format("out/reference/%s_%dx%d_%dx%dspp_b%d%s.exr",
                                                     name, width, height, ref_frames, ref_spp,
-                                                    ref_bounces)}
+                                                    ref_bounces, shutter and string.format(
+                                                        "_shutter%g-%g", shutter[1], shutter[2])
+                                                        or "")}
     local ms_per_frame, pass_ms = {}, {}
     local static_series = {}
     local want = {}

@@ -30,7 +30,8 @@ end
 -- frames of `opts.spp` paths and written to `opts.path` (EXR) so the next run reuses it.
 -- Default path: out/reference/<scene>_<W>x<H>_<frames>x<spp>spp.exr (shared by the scripts).
 -- `opts.params` ({["pass.param"] = value}) are set on the reference renderer (e.g. maxBounces);
--- give such references their own `opts.path`.
+-- give such references their own `opts.path`. `opts.shutter` ({open, close}, frames) sets the
+-- camera's shutter (with params["pt.motionBlur"] = true: a motion-blurred reference).
 function util.reference(opts)
   local path = opts.path
   if path == nil then
@@ -47,6 +48,7 @@ function util.reference(opts)
   end
   local r = loom.renderer{graph = opts.graph or "graphs/pt_reference.json", scene = opts.scene,
                           width = opts.width, height = opts.height, seed = opts.seed or 1000}
+  if opts.shutter then r:shutter(opts.shutter[1], opts.shutter[2]) end
   if opts.spp and opts.spp > 0 then r:set("pt.samplesPerPixel", opts.spp) end
   for key, value in pairs(opts.params or {}) do r:set(key, value) end
   local gpu_ms = 0
