@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include "core/graph/Renderer.h"
+#include "core/image/Flip.h"
 #include "core/image/Image.h"
 #include "core/scene/Camera.h"
 #include "core/scene/SceneGpu.h"
@@ -1180,6 +1181,33 @@ int lMetric(lua_State* L) {
     return 1;
 }
 
+// loom.metrics.flip(image, reference [, {ppd=, ldr=}]): mean FLIP (Andersson et al. 2020) and
+// the per-pixel error image. Default: HDR-FLIP of linear images; ldr = true: LDR-FLIP of sRGB
+// images in [0, 1]. ppd: pixels per degree of the observer (default 67, the papers').
+int lFlip(lua_State* L) {
+    const std::string fn = "loom.metrics.flip";
+    ImageData& a = imageArg(L, 1, fn, "the image (argument 1)");
+    ImageData& b = imageArg(L, 2, fn, "the reference (argument 2)");
+    double ppd = kFlipDefaultPpd;
+    bool ldr = false;
+    if (!lua_isnoneornil(L, 3)) {
+        if (lua_type(L, 3) != LUA_TTABLE)
+            throw ScriptError(fn + ": options must be a table {ppd=, ldr=}, got " + describe(L, 3));
+        checkKeys(L, 3, fn, {"ppd", "ldr"});
+        ppd = optNumberField(L, 3, "ppd", fn).value_or(ppd);
+        ldr = optBoolField(L, 3, "ldr", fn, false);
+        if (!(ppd > 0.0 && ppd < 1e4))
+            throw ScriptError(fmt::format("{}: 'ppd' must be in (0, 10000), got {}", fn, ppd));
+    }
+    if (a.width != b.width || a.height != b.height)
+        throw ScriptError(fmt::format("{}: image is {}x{} but reference is {}x{}", fn, a.width,
+                                      a.height, b.width, b.height));
+    ImageData err = ldr ? flipLdr(a, b, ppd) : flipHdr(a, b, ppd);
+    lua_pushnumber(L, meanOf(err));
+    pushImage(L, std::move(err));
+    return 2;
+}
+
 // Per-pixel error mapped to false colour; max defaults to the 99th percentile of the errors.
 int lErrorImage(lua_State* L) {
     const std::string fn = "loom.metrics.error_image";
@@ -1626,10 +1654,13 @@ const luaL_Reg kLoomFunctions[] = {{"renderer", guarded<lRenderer>},
                                    {"pass_types", guarded<lPassTypes>},
                                    {nullptr, nullptr}};
 
-const luaL_Reg kMetricFunctions[] = {
-    {"mse", guarded<lMetric<Metric::MSE>>},   {"relmse", guarded<lMetric<Metric::RelMSE>>},
-    {"rmse", guarded<lMetric<Metric::RMSE>>}, {"mape", guarded<lMetric<Metric::MAPE>>},
-    {"error_image", guarded<lErrorImage>},    {nullptr, nullptr}};
+const luaL_Reg kMetricFunctions[] = {{"mse", guarded<lMetric<Metric::MSE>>},
+                                     {"relmse", guarded<lMetric<Metric::RelMSE>>},
+                                     {"rmse", guarded<lMetric<Metric::RMSE>>},
+                                     {"mape", guarded<lMetric<Metric::MAPE>>},
+                                     {"error_image", guarded<lErrorImage>},
+                                     {"flip", guarded<lFlip>},
+                                     {nullptr, nullptr}};
 
 int gcRenderer(lua_State* L) {
     return gcOwned<Renderer>(L, kRendererMeta);
