@@ -25,7 +25,8 @@
 --   seeds (r:set_seed + r:reset, one renderer per configuration).
 -- still: as moving, with the camera at rest: the last of move_frames frames, single-frame
 --   estimates at equal time per frame (how Lin et al. 2022 compare ReSTIR PT with PT).
--- Metrics: relMSE and MAPE (loom.metrics, eps 0.01) and relMSE without the worst `trim`
+-- Metrics: relMSE and MAPE (loom.metrics, eps 0.01), and for still/moving rows HDR-FLIP
+-- (loom.metrics.flip, mean over the pixels) and relMSE without the worst `trim`
 -- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
 -- Still/moving rows also give the standard error of relMSE over the repeats (fireflies make it
 -- large: same-estimator rows can differ 3x at 8 repeats), the ratio at equal time with the
@@ -239,7 +240,7 @@ for _, scene_arg in ipairs(scenes) do
           r:set(cfg.spp_param, spp)
         end
         local sum_relmse, sum_trim, sum_mape, sum_ms, total_frames = 0, 0, 0, 0, 0
-        local sum_rays, sum_relmse2 = 0, 0
+        local sum_rays, sum_relmse2, sum_flip = 0, 0, 0
         for rep = 1, repeats do
           r:set_seed(seed + 100 * rep)
           r:set_time(0)
@@ -260,6 +261,7 @@ for _, scene_arg in ipairs(scenes) do
           sum_relmse2 = sum_relmse2 + relmse * relmse
           sum_trim = sum_trim + trimmed_relmse(img, ref, trim)
           sum_mape = sum_mape + loom.metrics.mape(img, ref)
+          sum_flip = sum_flip + loom.metrics.flip(img, ref)
           if rep == 1 then
             r:capture("tm.output", string.format("%s/%s_%s_%s.png", out, name,
                                                  slug(cfg.name), kind))
@@ -270,7 +272,7 @@ for _, scene_arg in ipairs(scenes) do
         local row = {index = #rows + 1, scene = name, camera = kind, config = cfg.name,
                      frames = total_frames, gpu_ms = sum_ms, spp = spp,
                      relmse = sum_relmse / repeats, relmse_trim = sum_trim / repeats,
-                     mape = sum_mape / repeats}
+                     mape = sum_mape / repeats, flip = sum_flip / repeats}
         rows[#rows + 1] = row
         summary[#summary + 1] = {scene = name, camera = kind, config = cfg.name,
                                  frames = total_frames, gpu_ms = sum_ms, spp = spp,
@@ -278,7 +280,7 @@ for _, scene_arg in ipairs(scenes) do
                                  rays_per_frame = sum_rays / total_frames, relmse = row.relmse,
                                  relmse_se = repeats > 1 and math.sqrt(math.max(0, sum_relmse2
                                      / repeats - row.relmse ^ 2) / (repeats - 1)) or nil,
-                                 relmse_trim = row.relmse_trim, mape = row.mape}
+                                 relmse_trim = row.relmse_trim, mape = row.mape, flip = row.flip}
         loom.progress(#summary, #summary, name .. " " .. kind)
       end
     end
@@ -320,6 +322,7 @@ util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
                   {key = "relmse_se", title = "(std. err.)", fmt = "%.5f"},
                   {key = "relmse_trim", title = "relMSE trim", fmt = "%.5f"},
                   {key = "mape", title = "MAPE", fmt = "%.4f"},
+                  {key = "flip", title = "FLIP", fmt = "%.4f"},
                   {key = "ratio", title = configs[1].name .. "/this relMSE", fmt = "%.2f"},
                   {key = "ratio_trim", title = "(trim)", fmt = "%.2f"},
                   {key = "ratio_time", title = "at equal time (scaled)", fmt = "%.2f"},
@@ -335,7 +338,7 @@ loom.write_csv(out .. "/restir_equal_time.csv", rows,
                            "frames", "spp", "relmse", "relmse_trim", "mape"}})
 loom.write_csv(out .. "/summary.csv", summary,
                {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
-                           "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mape", "ratio",
+                           "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mape", "flip", "ratio",
                            "ratio_trim", "ratio_time", "rays_per_frame", "spp_equal_rays",
                            "ratio_rays"}})
 print(string.format("\nwrote %s/restir_equal_time.csv, %s/summary.csv and plots", out, out))
