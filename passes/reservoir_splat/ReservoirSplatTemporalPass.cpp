@@ -74,15 +74,7 @@ public:
         mResample = compileKernel(*this, shaders, "passes/reservoir_splat/splat_resample.comp");
     }
     void execute(ExecuteContext& ctx) override {
-        gpu::Bindings b;
-        ctx.scene().bind(b);
-        b.set("ReservoirsIn", ctx.buffer("reservoirs"))
-            .set("PrevReservoirs", ctx.buffer("prevReservoirs"))
-            .set("PrimaryIn", ctx.buffer("primary"))
-            .set("PrevPrimary", ctx.buffer("prevPrimary"))
-            .set("motionImage", ctx.texture("motion"))
-            .set("ReservoirsOut", ctx.buffer("reservoirsOut"))
-            .set("RestirCounters", mShiftCounters.reset(ctx.gpu(), ctx.cmd()));
+        gpu::Bindings b = restir::temporalReuseBindings(ctx, mShiftCounters);
         mScatter = param<std::string>("mode") != "gather";
         if (!mScatter) {
             KernelParams(*this, *mGather, ctx).dispatch(ctx, b, ctx.width(), ctx.height());

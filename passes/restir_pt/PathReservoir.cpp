@@ -2,6 +2,9 @@
 // here, they reach every kernel as SHIFT_* and DOF_SHIFT_* defines (ShaderEnums.h).
 #include "passes/restir_pt/PathReservoir.h"
 
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+
 namespace loom::restir {
 
 LOOM_REGISTER_SHADER_ENUM(Shift, "SHIFT", {"hybrid", "reconnection", "replay"},
@@ -52,6 +55,19 @@ void reflectTemporalReuse(PassReflection& r) {
             "ablation, biased: with mis=uniform, count the history even when the current "
             "sample "
             "cannot shift to it (the known darkening bug)");
+}
+
+gpu::Bindings temporalReuseBindings(ExecuteContext& ctx, ShiftCounters& counters) {
+    gpu::Bindings b;
+    ctx.scene().bind(b);
+    b.set("ReservoirsIn", ctx.buffer("reservoirs"))
+        .set("PrevReservoirs", ctx.buffer("prevReservoirs"))
+        .set("PrimaryIn", ctx.buffer("primary"))
+        .set("PrevPrimary", ctx.buffer("prevPrimary"))
+        .set("motionImage", ctx.texture("motion"))
+        .set("ReservoirsOut", ctx.buffer("reservoirsOut"))
+        .set("RestirCounters", counters.reset(ctx.gpu(), ctx.cmd()));
+    return b;
 }
 
 }  // namespace loom::restir

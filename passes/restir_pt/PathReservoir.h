@@ -47,4 +47,8 @@ private:
     gpu::CounterBuffer<6> mCounters{"RestirCounters"};
 };
 
+// Binds the scene and reflectTemporalReuse's ports under the temporal kernels' block names, and
+// the shift counters (zeroed).
+gpu::Bindings temporalReuseBindings(ExecuteContext& ctx, ShiftCounters& counters);
+
 }  // namespace loom::restir

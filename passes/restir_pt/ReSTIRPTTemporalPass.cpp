@@ -12,15 +12,7 @@ public:
         mPipeline = compileKernel(*this, shaders, "passes/restir_pt/temporal.comp");
     }
     void execute(ExecuteContext& ctx) override {
-        gpu::Bindings b;
-        ctx.scene().bind(b);
-        b.set("ReservoirsIn", ctx.buffer("reservoirs"))
-            .set("PrevReservoirs", ctx.buffer("prevReservoirs"))
-            .set("PrimaryIn", ctx.buffer("primary"))
-            .set("PrevPrimary", ctx.buffer("prevPrimary"))
-            .set("motionImage", ctx.texture("motion"))
-            .set("ReservoirsOut", ctx.buffer("reservoirsOut"))
-            .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
+        gpu::Bindings b = restir::temporalReuseBindings(ctx, mCounters);
         KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }

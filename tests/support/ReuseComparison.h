@@ -47,6 +47,14 @@ inline std::unique_ptr<RenderGraph> ptGraph(int spp, int maxBounces, bool motion
     return RenderGraph::parse(g.dump(), "<test>");
 }
 
+// A scene with its camera turned into a thin lens (aperture radius, focus distance).
+inline scene::Scene withThinLens(scene::Scene s, float aperture, float focus) {
+    s.camera.type = scene::CameraType::ThinLens;
+    s.camera.apertureRadius = aperture;
+    s.camera.focusDistance = focus;
+    return s;
+}
+
 inline ImageData toLuminance(const ImageData& img) {
     ImageData out = img;
     for (uint32_t i = 0; i < img.width * img.height; ++i) {

@@ -47,10 +47,14 @@ TEST(ReservoirSplat, UnbiasedUnderCameraMotion) {
 // shift and no heuristic MIS. Moving shapes: x1 keeps its barycentrics on the moving box, the
 // forward projection and the reverse splat see each frame's geometry.
 TEST(ReservoirSplat, UnbiasedWithDepthOfFieldAndMovingShapes) {
-    scene::Scene lens = scene::loadScene(sourcePath("scenes/cornell_box.json"));
-    lens.camera.type = scene::CameraType::ThinLens;
-    lens.camera.apertureRadius = 0.4f;
-    lens.camera.focusDistance = 5.5f;
+    scene::Scene lens =
+        withThinLens(scene::loadScene(sourcePath("scenes/cornell_box.json")), 0.4f, 5.5f);
+    // Thin geometry under the moving, zooming camera, defocused (about 1.5 px of blur at 32x32).
+    auto fine = compareWithReference(
+        withThinLens(scene::loadScene(sourcePath("scenes/fine_geometry.json")), 0.2f, 1.5f),
+        "splat.json", {}, 8.0f);
+    EXPECT_TRUE(fine.unbiased()) << "fine_geometry thin lens: " << fine.restir << " vs "
+                                 << fine.reference;
     for (const char* graph : {"splat.json", "splat_backup.json"}) {
         auto dof = compareWithReference(lens, graph, {}, 3.0f);
         EXPECT_TRUE(dof.unbiased())
@@ -107,10 +111,8 @@ TEST(ReservoirSplat, ShiftIsInvertibleWithFiniteDifferenceJacobianAndUnitMis) {
                  "scale": [1.2, 1.1, 1.3]}])");
     TempDir tmp("loom-splat-probe");
     writeFile(tmp / "box.json", boxScene.dump());
-    scene::Scene lens = scene::loadScene(sourcePath("scenes/cornell_box.json"));
-    lens.camera.type = scene::CameraType::ThinLens;
-    lens.camera.apertureRadius = 0.4f;
-    lens.camera.focusDistance = 5.5f;
+    scene::Scene lens =
+        withThinLens(scene::loadScene(sourcePath("scenes/cornell_box.json")), 0.4f, 5.5f);
     struct Case {
         const char* name;
         scene::Scene scene;

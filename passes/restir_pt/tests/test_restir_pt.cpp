@@ -137,12 +137,10 @@ TEST(AreaReSTIR, UnbiasedTemporalVariants) {
 }
 
 TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
-    scene::Scene s = scene::loadScene(sourcePath("scenes/cornell_box.json"));
-    s.camera.type = scene::CameraType::ThinLens;
     // Focused near the front of the boxes: the back wall's circle of confusion spans a few
     // pixels, where primary-hit reconnection succeeds for near neighbours.
-    s.camera.apertureRadius = 0.4f;
-    s.camera.focusDistance = 5.5f;
+    scene::Scene s =
+        withThinLens(scene::loadScene(sourcePath("scenes/cornell_box.json")), 0.4f, 5.5f);
     for (const char* graph : {"area_restir.json", "restir_pt.json"}) {
         auto c = compareWithReference(s, graph, {}, 3.0f);
         EXPECT_TRUE(c.unbiased()) << graph << ": " << c.restir << " vs " << c.reference;
@@ -162,10 +160,9 @@ TEST(AreaReSTIR, UnbiasedWithDepthOfField) {
 // The primary-hit reconnection Jacobian (lens sample space) against central finite differences
 // on a defocused Cornell box, and the inverse concentric disk mapping's round trip.
 TEST(AreaReSTIR, PrimaryHitReconnectionJacobian) {
-    scene::Scene s = scene::loadScene(sourcePath("scenes/cornell_box.json"));
-    s.camera.type = scene::CameraType::ThinLens;
-    s.camera.apertureRadius = 0.4f;
-    s.camera.focusDistance = 3.0f;  // everything strongly defocused
+    // Focused at 3: everything strongly defocused.
+    scene::Scene s =
+        withThinLens(scene::loadScene(sourcePath("scenes/cornell_box.json")), 0.4f, 3.0f);
     json g = {
         {"name", "lens_jacobian"},
         {"passes",
@@ -400,11 +397,8 @@ TEST(ReSTIRPT, Explore) {
     if (!e) GTEST_SKIP() << "set LOOM_RESTIR_EXPLORE";
     json cfg = json::parse(e);
     scene::Scene s = scene::loadScene(sourcePath(cfg.value("scene", "scenes/cornell_box.json")));
-    if (cfg.contains("aperture")) {  // thin lens: {"aperture": 0.4, "focus": 5.5}
-        s.camera.type = scene::CameraType::ThinLens;
-        s.camera.apertureRadius = cfg["aperture"].get<float>();
-        s.camera.focusDistance = cfg.value("focus", 5.5f);
-    }
+    if (cfg.contains("aperture"))  // thin lens: {"aperture": 0.4, "focus": 5.5}
+        s = withThinLens(s, cfg["aperture"].get<float>(), cfg.value("focus", 5.5f));
     auto c = compareWithReference(s, cfg.value("graph", "restir_pt.json"),
                                   cfg.value("overrides", json::object()), cfg.value("dt", 0.0f));
     EXPECT_TRUE(c.unbiased());
