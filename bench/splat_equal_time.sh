@@ -25,7 +25,7 @@ run() {  # scene, degrees, dolly, out name[, shutter]; MOVE_ZOOM: fov factor at 
 }
 scenes=scenes/fine_geometry.json
 run scenes/fine_geometry.json 8 0.15 fine_geometry
-stairs=../shared/scenes/staircase2-modern-hall/scene.xml
+stairs=${STAIRS:-../shared/scenes/staircase2-modern-hall/scene.xml}  # STAIRS=none: skip
 if [ -e "$stairs" ]; then
     scenes="$scenes $stairs"
     # Its look-at point is 13 units away (2 degrees move the camera 0.45), and a wall is just
@@ -41,7 +41,7 @@ for scene in $scenes; do
         graph=graphs/splat.json
         [ $mode = multi_scatter ] && graph=graphs/splat_motion_blur.json
         echo "== $mode, $scene, ${STAGE}x${STAGE} (GPU ms averaged over frames 2-5)"
-        "$LOOM" render $graph --scene "$scene" --width "$STAGE" --height "$STAGE" --frames 5 \
+        "$LOOM" render $graph --scene "$scene" --width "$STAGE" --height "$STAGE" --frames "${STAGE_FRAMES:-5}" \
             --set temporal.mode=$mode --timings --quiet --out "$OUT/stages_$mode.png" | sed "/^resource/,\$d"
     done
 done

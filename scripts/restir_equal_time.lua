@@ -335,7 +335,7 @@ util.print_table({{key = "scene"}, {key = "config"}, {key = "pass"},
 
 loom.write_csv(out .. "/restir_equal_time.csv", rows,
                {columns = {"index", "scene", "camera", "config", "budget_ms", "gpu_ms",
-                           "frames", "spp", "relmse", "relmse_trim", "mape"}})
+                           "frames", "spp", "relmse", "relmse_trim", "mape", "flip"}})
 loom.write_csv(out .. "/summary.csv", summary,
                {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
                            "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mape", "flip", "ratio",

@@ -833,7 +833,7 @@ TEST(LoomRun, ReSTIREqualTimeScript) {
     script::CsvTable csv = script::readCsv(tmp / "rt/restir_equal_time.csv");
     EXPECT_EQ(csv.header,
               (std::vector<std::string>{"index", "scene", "camera", "config", "budget_ms", "gpu_ms",
-                                        "frames", "spp", "relmse", "relmse_trim", "mape"}));
+                                        "frames", "spp", "relmse", "relmse_trim", "mape", "flip"}));
     // Static: 2 configurations x 2 budget steps; still and moving: one row per configuration.
     ASSERT_EQ(csv.rows.size(), 8u);
     int moving = 0, still = 0;
@@ -846,6 +846,9 @@ TEST(LoomRun, ReSTIREqualTimeScript) {
             ++(row[2] == "still" ? still : moving);
             EXPECT_EQ(row[6], "3") << "frames of the camera swing";
             EXPECT_GE(std::stoi(row[7]), 1) << "spp";
+            double flip = std::stod(row[11]);
+            EXPECT_GT(flip, 0.0) << "FLIP";
+            EXPECT_LT(flip, 1.0) << "FLIP";
         }
     }
     EXPECT_EQ(moving, 2);
