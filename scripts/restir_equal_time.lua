@@ -23,7 +23,8 @@
 --   first; one with `spp_param` sets it so that its frame time (calibrated on a few frames)
 --   matches the slowest of those. relMSE/MAPE of the last frame are averaged over `repeats`
 --   seeds (r:set_seed + r:reset, one renderer per configuration).
--- still: as moving, with the camera at rest: the last of move_frames frames, single-frame
+-- still: as moving, with the camera at rest (a scene's own camera path is replaced by its time-0
+--   pose): the last of move_frames frames, single-frame
 --   estimates at equal time per frame (how Lin et al. 2022 compare ReSTIR PT with PT).
 -- Metrics: relMSE and MAPE (loom.metrics, eps 0.01), and for still/moving rows HDR-FLIP
 -- (loom.metrics.flip, mean over the pixels) and relMSE without the worst `trim`
@@ -216,6 +217,10 @@ for _, scene_arg in ipairs(scenes) do
           if not path_written then swing_path(r:camera(), path) end
           path_written = true
           r:camera_path(path)
+        else
+          -- Still: hold the camera at its time-0 pose (the reference's), also in scenes whose
+          -- camera has a path of its own (r:camera{...} replaces the path).
+          r:camera(r:camera())
         end
         r:set_time(0)
         local spp = 1
