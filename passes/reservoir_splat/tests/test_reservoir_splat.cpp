@@ -55,6 +55,13 @@ TEST(ReservoirSplat, UnbiasedWithDepthOfFieldAndMovingShapes) {
         "splat.json", {}, 8.0f);
     EXPECT_TRUE(fine.unbiased()) << "fine_geometry thin lens: " << fine.restir << " vs "
                                  << fine.reference;
+    // 48 sequences: at 24 one 4x4-pixel block on a highlight read fine |z| 4.53; at 96 the worst
+    // is 3.07 (coarse 2.08, in the region where Area ReSTIR also reads -1.9 %): chance.
+    auto glossy = compareWithReference(
+        withThinLens(scene::loadScene(sourcePath("scenes/glossy_spheres.json")), 0.3f, 6.0f),
+        "splat.json", {}, 2.0f, 32, std::max(48, defaultSequences()));
+    EXPECT_TRUE(glossy.unbiased())
+        << "glossy thin lens: " << glossy.restir << " vs " << glossy.reference;
     for (const char* graph : {"splat.json", "splat_backup.json"}) {
         auto dof = compareWithReference(lens, graph, {}, 3.0f);
         EXPECT_TRUE(dof.unbiased())
@@ -237,13 +244,19 @@ TEST(ReservoirSplat, DeepCheck) {
     if (!e) GTEST_SKIP() << "set LOOM_SPLAT_DEEP=<sequences>";
     std::string graphs = std::getenv("LOOM_SPLAT_GRAPHS") ? std::getenv("LOOM_SPLAT_GRAPHS")
                                                           : "splat.json,splat_backup.json";
-    scene::Scene s = scene::loadScene(sourcePath("scenes/cornell_box.json"));
+    // LOOM_SPLAT_SCENE=glossy_lens: the glossy spheres under a thin lens instead.
+    const char* which = std::getenv("LOOM_SPLAT_SCENE");
+    bool glossyLens = which && std::string(which) == "glossy_lens";
+    scene::Scene s =
+        glossyLens
+            ? withThinLens(scene::loadScene(sourcePath("scenes/glossy_spheres.json")), 0.3f, 6.0f)
+            : scene::loadScene(sourcePath("scenes/cornell_box.json"));
     size_t start = 0;
     while (start < graphs.size()) {
         size_t end = graphs.find(',', start);
         std::string g =
             graphs.substr(start, end == std::string::npos ? std::string::npos : end - start);
-        auto c = compareWithReference(s, g, {}, 3.0f, 32, std::atoi(e));
+        auto c = compareWithReference(s, g, {}, glossyLens ? 2.0f : 3.0f, 32, std::atoi(e));
         EXPECT_TRUE(c.unbiased()) << g;
         if (end == std::string::npos) break;
         start = end + 1;
