@@ -2,9 +2,12 @@
 # Everything worth timing on a GPU device, in one bounded call: every family's graph at
 # 1920x1080 (GPU ms per pass, wall ms per frame, Mrays/s of the passes that count rays), the
 # PT vs ReSTIR PT equal-time relMSE comparison of bench/restir_equal_time.sh, and BVH traversal
-# throughput, on the device `loom devices` lists first. Prints one markdown table (plus the
+# throughput, on the device `loom devices` lists first. Reservoir splatting (splat, splat +
+# backup, multi-splat motion blur, Area ReSTIR beside them) runs on scenes/fine_geometry.json,
+# whose camera moves: the paper's 1920x1080 GPU setting. Prints one markdown table (plus the
 # equal-time summary) and writes CSV to out/device_suite/. Each step has its own time limit;
-# the whole suite stays under 6 minutes on a GPU.
+# on a GPU each render step is cut at STEP_S = 40 s, so 11 renders, the equal-time run and the
+# BVH bench bound the whole.
 #
 #   bash bench/device_suite.sh            # on device 0 at 1920x1080
 #   bash bench/device_suite.sh --smoke    # 64x64 on lavapipe, project scenes (CI runs this)
@@ -42,6 +45,7 @@ shared=${SHARED_SCENES:-../shared/scenes}
 ajar=$(scene_of "$shared/veach-ajar/scene.xml" scenes/glossy_spheres.json)
 sphere=$(scene_of "$shared/sms-sphere/sphere_sms.xml" scenes/glass_sphere.json)
 slab=$(scene_of scenes/wavy_slab.json)
+fine=$(scene_of scenes/fine_geometry.json)  # its camera moves: temporal reuse under motion
 
 device_name=$("$LOOM" devices | head -1)
 echo "device suite: ${device_name} (${W}x${H}, $(date -u +%Y-%m-%dT%H:%MZ))"
@@ -56,6 +60,10 @@ configs=(
   "sms_biased|graphs/sms_biased.json|$sphere"
   "mnee|graphs/mnee.json|$sphere"
   "sms_slab|graphs/sms.json|$slab"
+  "area_restir_fine|graphs/area_restir.json|$fine"
+  "splat|graphs/splat.json|$fine"
+  "splat_backup|graphs/splat_backup.json|$fine"
+  "splat_motion_blur|graphs/splat_motion_blur.json|$fine"
 )
 
 passes_csv=$OUT/passes.csv
