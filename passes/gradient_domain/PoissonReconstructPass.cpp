@@ -19,6 +19,11 @@ constexpr uint64_t kVec = 16;              // one vec4
 // Spare elements for the ceil() overhead of small multigrid pyramids.
 constexpr uint64_t kSpareElements = 4096;
 constexpr uint32_t kCoarsestSweeps = 8;
+// Indirect dispatch arguments (uvec4 each): level l's 8x8 groups at entry l, one group for
+// the reduce at kReduceArgs. A solve's kernels read them from PoissonDispatch, which the
+// reduce of r.r sets to these or to zero groups once the solve has converged: skipped steps
+// then cost no invocations (on lavapipe an invocation that returns at once still costs).
+constexpr uint32_t kReduceArgs = 32;  // POISSON_REDUCE_ARGS
 constexpr uint32_t kPlotWidth = 256, kPlotHeight = 128;
 
 enum Field : uint32_t { kNone, kRR, kRZ, kPAp, kBB, kRRasRZ };  // poisson_reduce.comp
@@ -150,11 +155,30 @@ public:
                 fmt::format("PoissonReconstruct: a {}x{} frame does not fit its "
                             "scratch buffers (too thin an image?)",
                             w, h));
+        if (mLevels.size() > kReduceArgs)
+            throw UserError("PoissonReconstruct: too many multigrid levels");
+        std::vector<uint32_t> full(4 * (kReduceArgs + 1), 0u);
+        for (size_t l = 0; l < mLevels.size(); ++l) {
+            full[4 * l] = (mLevels[l].w + 7) / 8;
+            full[4 * l + 1] = (mLevels[l].h + 7) / 8;
+            full[4 * l + 2] = 1;
+        }
+        full[4 * kReduceArgs] = full[4 * kReduceArgs + 1] = full[4 * kReduceArgs + 2] = 1;
+        if (!mArgs) {
+            mArgs = ctx.gpu().createBuffer(full.size() * 4, "PoissonDispatch");
+            mArgsFull = ctx.gpu().createBuffer(full.size() * 4, "PoissonDispatchFull");
+        }
+        if (full != mArgsUploaded) {
+            ctx.gpu().uploadBuffer(*mArgsFull, full.data(), full.size() * 4);
+            mArgsUploaded = full;
+        }
         mBind = gpu::Bindings();
         mBind.set("PoissonVectors", ctx.scratchBuffer("vectors"))
             .set("PoissonWeights", ctx.scratchBuffer("weights"))
             .set("PoissonPartials", ctx.scratchBuffer("partials"))
             .set("PoissonHistory", mHistory)
+            .set("PoissonDispatch", mArgs)
+            .set("PoissonDispatchFull", mArgsFull)
             .set("primalImage", ctx.texture("primal"))
             .set("dxImage", ctx.texture("dx"))
             .set("dyImage", ctx.texture("dy"))
@@ -204,7 +228,7 @@ public:
                         .set("rOffset", u(mR))
                         .set("pOffset", u(mP))
                         .set("qOffset", u(mQ))
-                        .dispatch(ctx, mBind, w, h);
+                        .dispatchIndirect(ctx, mBind, *mArgs, 0);
                     barrier();
                     residual(0, mX, mB, mR, slot);
                     reduce(slot + 1, slot, s0, kRR, kNone);
@@ -216,7 +240,7 @@ public:
                         .set("slot", slot)
                         .set("aOffset", u(mR))
                         .set("bOffset", u(mMX))
-                        .dispatch(ctx, mBind, w, h);
+                        .dispatchIndirect(ctx, mBind, *mArgs, 0);
                     reduce(slot, slot, s0, kRZ, kNone);
                 }
                 frame(*mDirection)
@@ -224,13 +248,13 @@ public:
                     .set("first", k == 0 ? 1u : 0u)
                     .set("zOffset", u(mg ? mMX : mR))
                     .set("pOffset", u(mP))
-                    .dispatch(ctx, mBind, w, h);
+                    .dispatchIndirect(ctx, mBind, *mArgs, 0);
                 barrier();
                 frame(*mApply)
                     .set("slot", slot)
                     .set("pOffset", u(mP))
                     .set("qOffset", u(mQ))
-                    .dispatch(ctx, mBind, w, h);
+                    .dispatchIndirect(ctx, mBind, *mArgs, 0);
                 reduce(slot, slot, s0, kPAp, kNone);
                 frame(*mUpdate)
                     .set("slot", slot)
@@ -239,7 +263,7 @@ public:
                     .set("rOffset", u(mR))
                     .set("pOffset", u(mP))
                     .set("qOffset", u(mQ))
-                    .dispatch(ctx, mBind, w, h);
+                    .dispatchIndirect(ctx, mBind, *mArgs, 0);
                 reduce(slot + 1, slot, s0, mg ? kRR : kRRasRZ, kNone);
             }
         }
@@ -301,25 +325,32 @@ private:
     void barrier() { mCtx->cmd().barrier(); }
     void reduce(uint32_t slot, uint32_t gate, uint32_t solveSlot, uint32_t a, uint32_t b) {
         barrier();
-        KernelParams(*this, *mReduce, *mCtx)
-            .set("groups", mGroups)
+        KernelParams k(*this, *mReduce, *mCtx);
+        k.set("groups", mGroups)
             .set("slot", slot)
             .set("gateSlot", gate)
             .set("solveSlot", solveSlot)
             .set("fieldA", a)
             .set("fieldB", b)
-            .dispatchGroups(*mCtx, mBind, 1);
+            .set("levels", uint32_t(mLevels.size()));
+        if (gate == kNoSlot)
+            k.dispatchGroups(*mCtx, mBind, 1);
+        else
+            k.dispatchIndirect(*mCtx, mBind, *mArgs, 16 * kReduceArgs);
         barrier();
     }
     void residual(size_t l, uint64_t x, uint64_t b, uint64_t r, uint32_t slot) {
-        KernelParams(*this, *mResidual, *mCtx)
-            .setUints("levelSize", &mLevels[l].w, 2)
+        KernelParams k(*this, *mResidual, *mCtx);
+        k.setUints("levelSize", &mLevels[l].w, 2)
             .set("xOffset", u(x))
             .set("bOffset", u(b))
             .set("rOffset", u(r))
             .set("wOffset", u(mLevels[l].offset))
-            .set("slot", slot)
-            .dispatch(*mCtx, mBind, mLevels[l].w, mLevels[l].h);
+            .set("slot", slot);
+        if (slot == kNoSlot)
+            k.dispatch(*mCtx, mBind, mLevels[l].w, mLevels[l].h);
+        else
+            k.dispatchIndirect(*mCtx, mBind, *mArgs, 16 * l);
     }
     void smooth(size_t l, uint32_t colour, bool zeroGuess, uint32_t slot) {
         KernelParams(*this, *mSmooth, *mCtx)
@@ -330,7 +361,7 @@ private:
             .set("colour", colour)
             .set("zeroGuess", zeroGuess ? 1u : 0u)
             .set("slot", slot)
-            .dispatch(*mCtx, mBind, mLevels[l].w, mLevels[l].h);
+            .dispatchIndirect(*mCtx, mBind, *mArgs, 16 * l);
         barrier();
     }
     // z = M^-1 r by one V-cycle: (red, black)^nu before, (black, red)^nu after, so that M is
@@ -351,7 +382,7 @@ private:
                 .set("rOffset", u(mMR + mLevels[l].offset))
                 .set("bOffset", u(mMB + mLevels[l + 1].offset))
                 .set("slot", slot)
-                .dispatch(*mCtx, mBind, mLevels[l + 1].w, mLevels[l + 1].h);
+                .dispatchIndirect(*mCtx, mBind, *mArgs, 16 * (l + 1));
             barrier();
         }
         for (uint32_t i = 0; i < kCoarsestSweeps; ++i) {
@@ -369,7 +400,7 @@ private:
                 .set("xOffset", u(mMX + mLevels[l].offset))
                 .set("coarseOffset", u(mMX + mLevels[l + 1].offset))
                 .set("slot", slot)
-                .dispatch(*mCtx, mBind, mLevels[l].w, mLevels[l].h);
+                .dispatchIndirect(*mCtx, mBind, *mArgs, 16 * l);
             barrier();
             for (uint32_t i = 0; i < mSweeps; ++i) {
                 smooth(l, 1, false, slot);
@@ -382,7 +413,8 @@ private:
         mDirection, mApply, mUpdate, mDot, mSmooth, mRestrict, mProlong, mCoarsen, mOutput, mPlot;
     ExecuteContext* mCtx = nullptr;
     gpu::Bindings mBind;
-    std::shared_ptr<gpu::Buffer> mHistory;
+    std::shared_ptr<gpu::Buffer> mHistory, mArgs, mArgsFull;
+    std::vector<uint32_t> mArgsUploaded;
     std::vector<Level> mLevels;
     uint64_t mN = 0, mX = 0, mB = 0, mR = 0, mP = 0, mQ = 0, mMX = 0, mMB = 0, mMR = 0;
     uint32_t mGroups = 0, mSolves = 1, mStepsPerSolve = 52, mSweeps = 1;
