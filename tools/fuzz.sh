@@ -4,8 +4,12 @@
 # exec/s, coverage edges and features, corpus size, findings) and exits 1 if any harness found
 # a crash, a leak, a sanitizer report, a non-UserError exception or an input slower than 10 s.
 #
-#   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [--build DIR] [--out DIR] [HARNESS...]
-#                 (defaults: 60 s, 2 jobs, build-fuzz/, out/fuzz/, all seven harnesses)
+#   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [--seed S] [--build DIR] [--out DIR]
+#                 [HARNESS...]
+#                 (defaults: 60 s, 2 jobs, a random seed, build-fuzz/, out/fuzz/, all seven)
+#
+# --seed fixes libFuzzer's random seed (ctest passes 1): a failing CI run then replays here
+# with the same command, the seed printed in its table.
 #
 # Working corpora grow in OUT/corpus/<harness>; findings land in OUT/findings/.
 # A finding becomes a regression test in tests/badinput (see fuzz/README.md).
@@ -15,6 +19,7 @@ cd "$(dirname "$0")/.."
 seconds=60
 runs=-1
 jobs=2
+seed=0
 build=build-fuzz
 out=out/fuzz
 harnesses=()
@@ -23,9 +28,10 @@ while [ $# -gt 0 ]; do
     --seconds) seconds=$2; shift 2 ;;
     --runs) runs=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
+    --seed) seed=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n 2,10p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,14p "$0"; exit 0 ;;
     -*) echo "fuzz.sh: unknown option '$1'" >&2; exit 2 ;;
     *) harnesses+=("$1"); shift ;;
   esac
@@ -85,15 +91,16 @@ run_one() {
   [ "$h" = lua_json ] && d=fuzz/graph_json.dict
   [ -f "$d" ] && dict=(-dict="$d")
   "$build/fuzz/fuzz_$h" "$corpus" "$seed" "${dict[@]}" -max_total_time="$seconds" \
-    -runs="$runs" -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
+    -runs="$runs" -seed="$seed" -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$out/findings/$h-" >"$out/logs/$h.log" 2>&1 || true
 }
 export -f run_one seeds
-export seconds runs build out
+export seconds runs seed build out
 
 printf '%s\n' "${harnesses[@]}" | xargs -P "$jobs" -I{} bash -c 'run_one {}'
 
 status=0
+echo "libFuzzer seed: $seed (0: random; replay with --seed $seed --seconds $seconds)"
 printf '| harness | executions | exec/s | coverage (edges) | features | corpus | findings |\n'
 printf '| --- | --- | --- | --- | --- | --- | --- |\n'
 for h in "${harnesses[@]}"; do

@@ -18,12 +18,13 @@ constexpr uint64_t kStepBytes = 80;        // PoissonStep, poisson_common.glsl
 constexpr uint64_t kVec = 16;              // one vec4
 // Spare elements for the ceil() overhead of small multigrid pyramids.
 constexpr uint64_t kSpareElements = 4096;
-constexpr uint32_t kCoarsestSweeps = 8;
+constexpr uint32_t kCoarsestSweeps = 2;
 // Indirect dispatch arguments (uvec4 each): level l's 8x8 groups at entry l, one group for
 // the reduce at kReduceArgs. A solve's kernels read them from PoissonDispatch, which the
 // reduce of r.r sets to these or to zero groups once the solve has converged: skipped steps
 // then cost no invocations (on lavapipe an invocation that returns at once still costs).
-constexpr uint32_t kReduceArgs = 32;  // POISSON_REDUCE_ARGS
+constexpr uint32_t kHalfArgs = 32;    // POISSON_HALF_ARGS: + level, half the columns
+constexpr uint32_t kReduceArgs = 64;  // POISSON_REDUCE_ARGS
 constexpr uint32_t kPlotWidth = 256, kPlotHeight = 128;
 
 enum Field : uint32_t { kNone, kRR, kRZ, kPAp, kBB, kRRasRZ };  // poisson_reduce.comp
@@ -51,9 +52,17 @@ public:
             .doc("log10 relative residual per solver step (10^0 top, 10^-8 bottom)");
         r.outputBuffer("history")
             .bytes(kStepBytes * solves() * stepsPerSolve())
+            .optional()
             .doc(
                 "per solve (1 for l2, irlsIterations for l1): the weights record, then steps "
                 "0..iterations, each {vec4 rr, rz, pAp, bb; uvec4 info} (poisson_common.glsl)");
+        // The kernels' step records live in a buffer of the pass's own: an output nobody reads
+        // is transient memory that later passes of the frame may reuse before frameCompleted()
+        // reads the statistics from it.
+        SizeRule steps;
+        steps.mode = SizeRule::Mode::Fixed;
+        steps.bytes = kStepBytes * solves() * stepsPerSolve();
+        r.persistentBuffer("steps", steps, "the step records (copied to history when it is used)");
         r.paramEnum("solver", "l2", {"l2", "l1"})
             .doc("l2: min ||W(b - Px)||_2 in one linear solve; l1: IRLS, the first solve l2");
         r.param("alpha", 0.2)
@@ -128,7 +137,7 @@ public:
         mCtx = &ctx;
         mN = uint64_t(w) * h;
         mGroups = ((w + 7) / 8) * ((h + 7) / 8);
-        mHistory = ctx.buffer("history");
+        mHistory = ctx.persistentBuffer("steps");
         mSolves = solves();
         mStepsPerSolve = stepsPerSolve();
         const bool mg = multigrid();
@@ -141,7 +150,7 @@ public:
         mX = 0, mB = mN, mR = 2 * mN, mP = 3 * mN, mQ = 4 * mN;
         mLevels = {{w, h, 0}};
         if (mg)
-            while (std::min(mLevels.back().w, mLevels.back().h) > 2) {
+            while (std::min(mLevels.back().w, mLevels.back().h) > 16) {
                 const Level& f = mLevels.back();
                 mLevels.push_back({(f.w + 1) / 2, (f.h + 1) / 2, f.offset + f.size()});
             }
@@ -155,13 +164,16 @@ public:
                 fmt::format("PoissonReconstruct: a {}x{} frame does not fit its "
                             "scratch buffers (too thin an image?)",
                             w, h));
-        if (mLevels.size() > kReduceArgs)
+        if (mLevels.size() > kHalfArgs)
             throw UserError("PoissonReconstruct: too many multigrid levels");
         std::vector<uint32_t> full(4 * (kReduceArgs + 1), 0u);
         for (size_t l = 0; l < mLevels.size(); ++l) {
             full[4 * l] = (mLevels[l].w + 7) / 8;
             full[4 * l + 1] = (mLevels[l].h + 7) / 8;
             full[4 * l + 2] = 1;
+            full[4 * (kHalfArgs + l)] = ((mLevels[l].w + 1) / 2 + 7) / 8;
+            full[4 * (kHalfArgs + l) + 1] = (mLevels[l].h + 7) / 8;
+            full[4 * (kHalfArgs + l) + 2] = 1;
         }
         full[4 * kReduceArgs] = full[4 * kReduceArgs + 1] = full[4 * kReduceArgs + 2] = 1;
         if (!mArgs) {
@@ -268,6 +280,8 @@ public:
             }
         }
         frame(*mOutput).set("xOffset", u(mX)).dispatch(ctx, mBind, w, h);
+        if (auto history = ctx.buffer("history"))
+            ctx.cmd().copyBuffer(*mHistory, *history, mHistory->size());
         uint32_t plotSize[2] = {kPlotWidth, kPlotHeight};
         KernelParams(*this, *mPlot, ctx)
             .setUints("plotSize", plotSize, 2)
@@ -352,7 +366,8 @@ private:
         else
             k.dispatchIndirect(*mCtx, mBind, *mArgs, 16 * l);
     }
-    void smooth(size_t l, uint32_t colour, bool zeroGuess, uint32_t slot) {
+    // One colour of a red-black sweep, or (residual) r = b - A x after a sweep that ended black.
+    void smooth(size_t l, uint32_t colour, bool zeroGuess, uint32_t slot, bool residual = false) {
         KernelParams(*this, *mSmooth, *mCtx)
             .setUints("levelSize", &mLevels[l].w, 2)
             .set("xOffset", u(mMX + mLevels[l].offset))
@@ -360,8 +375,10 @@ private:
             .set("wOffset", u(mLevels[l].offset))
             .set("colour", colour)
             .set("zeroGuess", zeroGuess ? 1u : 0u)
+            .set("residual", residual ? 1u : 0u)
+            .set("rOffset", u(mMR + mLevels[l].offset))
             .set("slot", slot)
-            .dispatchIndirect(*mCtx, mBind, *mArgs, 16 * l);
+            .dispatchIndirect(*mCtx, mBind, *mArgs, 16 * (kHalfArgs + l));
         barrier();
     }
     // z = M^-1 r by one V-cycle: (red, black)^nu before, (black, red)^nu after, so that M is
@@ -373,9 +390,7 @@ private:
                 smooth(l, 0, i == 0, slot);
                 smooth(l, 1, false, slot);
             }
-            residual(l, mMX + mLevels[l].offset, l == 0 ? mR : mMB + mLevels[l].offset,
-                     mMR + mLevels[l].offset, slot);
-            barrier();
+            smooth(l, 0, false, slot, true);  // r = b - A x on the red half
             KernelParams(*this, *mRestrict, *mCtx)
                 .setUints("fineSize", &mLevels[l].w, 2)
                 .setUints("coarseSize", &mLevels[l + 1].w, 2)

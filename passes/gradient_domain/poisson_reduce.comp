@@ -18,7 +18,8 @@ layout(push_constant) uniform Params {
 
 // The dispatch arguments of the next steps' kernels (see PoissonReconstructPass.cpp): the full
 // group counts while the solve runs, zero groups once it has converged.
-#define POISSON_REDUCE_ARGS 32u
+#define POISSON_HALF_ARGS 32u  // + level: half the columns (red-black sweeps)
+#define POISSON_REDUCE_ARGS 64u
 layout(std430) buffer PoissonDispatch { uvec4 dispatchArgs[]; };
 layout(std430) readonly buffer PoissonDispatchFull { uvec4 fullArgs[]; };
 
@@ -37,7 +38,10 @@ void store(uint field, vec4 v) {
         vec4 bb = pc.solveSlot == pc.slot ? sums[1][0] : steps[pc.solveSlot].bb;
         bool going = any(greaterThan(v.rgb, pc.tolerance * pc.tolerance * bb.rgb));
         steps[pc.slot].info = uvec4(going ? 1u : 0u, 0u, 0u, 0u);
-        for (uint l = 0u; l < pc.levels; ++l) dispatchArgs[l] = going ? fullArgs[l] : uvec4(0u);
+        for (uint l = 0u; l < pc.levels; ++l) {
+            dispatchArgs[l] = going ? fullArgs[l] : uvec4(0u);
+            dispatchArgs[POISSON_HALF_ARGS + l] = going ? fullArgs[POISSON_HALF_ARGS + l] : uvec4(0u);
+        }
         dispatchArgs[POISSON_REDUCE_ARGS] = going ? fullArgs[POISSON_REDUCE_ARGS] : uvec4(0u);
     }
     if (field == FIELD_RZ || field == FIELD_RR_RZ) steps[pc.slot].rz = v;

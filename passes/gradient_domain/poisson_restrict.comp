@@ -1,6 +1,8 @@
 #version 460
 // PoissonReconstruct, multigrid: b_coarse = R r_fine with R = P^T / 4 (poisson_transfer.glsl),
-// gathered over the 4x4 fine cells whose interpolation uses this coarse cell.
+// gathered over the 4x4 fine cells whose interpolation uses this coarse cell. The fine
+// residual comes from poisson_smooth's residual mode, zero on the black cells ((x + y) odd):
+// those are skipped.
 #include "passes/gradient_domain/poisson_common.glsl"
 #include "passes/gradient_domain/poisson_transfer.glsl"
 
@@ -22,7 +24,9 @@ void main() {
     for (int fy = max(2 * c.y - 1, 0); fy <= min(2 * c.y + 2, nf.y - 1); ++fy) {
         float wy = poisson_prolong_weight(fy, c.y, nc.y);
         if (wy == 0.0) continue;
-        for (int fx = max(2 * c.x - 1, 0); fx <= min(2 * c.x + 2, nf.x - 1); ++fx) {
+        int first = max(2 * c.x - 1, 0);
+        first += (first + fy) & 1;  // the first red cell of the row
+        for (int fx = first; fx <= min(2 * c.x + 2, nf.x - 1); fx += 2) {
             float wx = poisson_prolong_weight(fx, c.x, nc.x);
             if (wx != 0.0) sum += (wx * wy) * vec[pc.rOffset + uint(fy) * pc.fineSize.x + uint(fx)];
         }
