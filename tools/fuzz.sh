@@ -19,7 +19,7 @@ cd "$(dirname "$0")/.."
 seconds=60
 runs=-1
 jobs=2
-seed=0
+fuzz_seed=0
 build=build-fuzz
 out=out/fuzz
 harnesses=()
@@ -28,7 +28,7 @@ while [ $# -gt 0 ]; do
     --seconds) seconds=$2; shift 2 ;;
     --runs) runs=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
-    --seed) seed=$2; shift 2 ;;
+    --seed) fuzz_seed=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     -h|--help) sed -n 2,14p "$0"; exit 0 ;;
@@ -91,16 +91,16 @@ run_one() {
   [ "$h" = lua_json ] && d=fuzz/graph_json.dict
   [ -f "$d" ] && dict=(-dict="$d")
   "$build/fuzz/fuzz_$h" "$corpus" "$seed" "${dict[@]}" -max_total_time="$seconds" \
-    -runs="$runs" -seed="$seed" -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
+    -runs="$runs" -seed="$fuzz_seed" -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$out/findings/$h-" >"$out/logs/$h.log" 2>&1 || true
 }
 export -f run_one seeds
-export seconds runs seed build out
+export seconds runs fuzz_seed build out
 
 printf '%s\n' "${harnesses[@]}" | xargs -P "$jobs" -I{} bash -c 'run_one {}'
 
 status=0
-echo "libFuzzer seed: $seed (0: random; replay with --seed $seed --seconds $seconds)"
+echo "libFuzzer seed: $fuzz_seed (0: random; replay with --seed $fuzz_seed --seconds $seconds)"
 printf '| harness | executions | exec/s | coverage (edges) | features | corpus | findings |\n'
 printf '| --- | --- | --- | --- | --- | --- | --- |\n'
 for h in "${harnesses[@]}"; do
