@@ -233,14 +233,7 @@ public:
             for (uint32_t k = 0; k < iterations; ++k) {
                 const uint32_t slot = s0 + k;
                 if (jacobi) {
-                    frame(*mUpdate)
-                        .set("slot", slot)
-                        .set("jacobi", 1u)
-                        .set("xOffset", u(mX))
-                        .set("rOffset", u(mR))
-                        .set("pOffset", u(mP))
-                        .set("qOffset", u(mQ))
-                        .dispatchIndirect(ctx, mBind, *mArgs, 0);
+                    update(slot, true);
                     barrier();
                     residual(0, mX, mB, mR, slot);
                     reduce(slot + 1, slot, s0, kRR, kNone);
@@ -268,14 +261,7 @@ public:
                     .set("qOffset", u(mQ))
                     .dispatchIndirect(ctx, mBind, *mArgs, 0);
                 reduce(slot, slot, s0, kPAp, kNone);
-                frame(*mUpdate)
-                    .set("slot", slot)
-                    .set("jacobi", 0u)
-                    .set("xOffset", u(mX))
-                    .set("rOffset", u(mR))
-                    .set("pOffset", u(mP))
-                    .set("qOffset", u(mQ))
-                    .dispatchIndirect(ctx, mBind, *mArgs, 0);
+                update(slot, false);
                 reduce(slot + 1, slot, s0, mg ? kRR : kRRasRZ, kNone);
             }
         }
@@ -352,6 +338,17 @@ private:
         else
             k.dispatchIndirect(*mCtx, mBind, *mArgs, 16 * kReduceArgs);
         barrier();
+    }
+    // x and r of one step: CG (x += alpha p, r -= alpha A p) or Jacobi (x += D^-1 r).
+    void update(uint32_t slot, bool jacobi) {
+        KernelParams(*this, *mUpdate, *mCtx)
+            .set("slot", slot)
+            .set("jacobi", jacobi ? 1u : 0u)
+            .set("xOffset", u(mX))
+            .set("rOffset", u(mR))
+            .set("pOffset", u(mP))
+            .set("qOffset", u(mQ))
+            .dispatchIndirect(*mCtx, mBind, *mArgs, 0);
     }
     void residual(size_t l, uint64_t x, uint64_t b, uint64_t r, uint32_t slot) {
         KernelParams k(*this, *mResidual, *mCtx);

@@ -162,6 +162,21 @@ ImageData noisy(const ImageData& img, double sigma, uint32_t seed) {
     return out;
 }
 
+// A known image, its exact forward differences, and noisy versions of all three.
+struct Problem {
+    ImageData truth, f, dx, dy;
+};
+Problem noisyProblem(uint32_t w, uint32_t h, double sigmaPrimal, double sigmaGradient,
+                     uint32_t seed) {
+    Problem p;
+    p.truth = knownImage(w, h);
+    forwardDifferences(p.truth, p.dx, p.dy);
+    p.f = noisy(p.truth, sigmaPrimal, seed);
+    p.dx = noisy(p.dx, sigmaGradient, seed + 1);
+    p.dy = noisy(p.dy, sigmaGradient, seed + 2);
+    return p;
+}
+
 struct Solve {
     ImageData image;
     std::vector<float> history;  // PoissonStep records, 20 floats each
@@ -250,11 +265,7 @@ TEST(PoissonReconstruct, DirectDctSolveIsTheMinimiser) {
 TEST(PoissonReconstruct, L2MatchesTheDirectDctSolve) {
     // Odd, non-square size; noisy primal and gradients inconsistent with each other.
     const uint32_t w = 37, h = 23;
-    ImageData truth = knownImage(w, h), dx, dy;
-    forwardDifferences(truth, dx, dy);
-    ImageData f = noisy(truth, 0.2, 11);
-    dx = noisy(dx, 0.1, 12);
-    dy = noisy(dy, 0.1, 13);
+    auto [truth, f, dx, dy] = noisyProblem(w, h, 0.2, 0.1, 11);
     ImageData exact = directSolve(f, dx, dy);
     Reconstruction rec(f, dx, dy);
     for (std::string solver : {"cg", "multigrid"}) {
@@ -314,11 +325,7 @@ TEST(PoissonReconstruct, ExactGradientsFixTheImageUpToThePrimalsMean) {
 
 TEST(PoissonReconstruct, CgDecreasesTheObjectiveAndTheResidualEveryStep) {
     const uint32_t w = 29, h = 31;
-    ImageData truth = knownImage(w, h), dx, dy;
-    forwardDifferences(truth, dx, dy);
-    ImageData f = noisy(truth, 0.3, 21);
-    dx = noisy(dx, 0.2, 22);
-    dy = noisy(dy, 0.2, 23);
+    auto [truth, f, dx, dy] = noisyProblem(w, h, 0.3, 0.2, 21);
     Reconstruction rec(f, dx, dy);
     for (std::string linear : {"cg", "multigrid"}) {
         // Multigrid reaches float precision after ~8 steps; compare before it does.
@@ -364,11 +371,7 @@ TEST(PoissonReconstruct, CgDecreasesTheObjectiveAndTheResidualEveryStep) {
 
 TEST(PoissonReconstruct, MultigridNeedsFarFewerStepsThanCg) {
     const uint32_t w = 64, h = 48;
-    ImageData truth = knownImage(w, h), dx, dy;
-    forwardDifferences(truth, dx, dy);
-    ImageData f = noisy(truth, 0.2, 31);
-    dx = noisy(dx, 0.1, 32);
-    dy = noisy(dy, 0.1, 33);
+    auto [truth, f, dx, dy] = noisyProblem(w, h, 0.2, 0.1, 31);
     Reconstruction rec(f, dx, dy);
     double steps[2];
     int i = 0;
