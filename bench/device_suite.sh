@@ -4,9 +4,10 @@
 # PT vs ReSTIR PT equal-time relMSE comparison of bench/restir_equal_time.sh, and BVH traversal
 # throughput, on the device `loom devices` lists first. Reservoir splatting (splat, splat +
 # backup, multi-splat motion blur, Area ReSTIR beside them) runs on scenes/fine_geometry.json,
-# whose camera moves: the paper's 1920x1080 GPU setting. Prints one markdown table (plus the
+# whose camera moves: the paper's 1920x1080 GPU setting; the Poisson solvers (L2 by 50 CG steps and
+# by 4 multigrid-CG steps, L1 by 20 x 50) on graphs/poisson_pt.json. Prints one markdown table (plus the
 # equal-time summary) and writes CSV to out/device_suite/. Each step has its own time limit;
-# on a GPU each render step is cut at STEP_S = 40 s, so 11 renders, the equal-time run and the
+# on a GPU each render step is cut at STEP_S = 40 s, so 14 renders, the equal-time run and the
 # BVH bench bound the whole.
 #
 #   bash bench/device_suite.sh            # on device 0 at 1920x1080
@@ -51,7 +52,9 @@ device_name=$("$LOOM" devices | head -1)
 echo "device suite: ${device_name} (${W}x${H}, $(date -u +%Y-%m-%dT%H:%MZ))"
 [ $smoke -eq 1 ] || uptime
 
-# config name | graph | scene
+cornell=$(scene_of scenes/cornell_box.json)
+
+# config name | graph | scene | extra render arguments (optional)
 configs=(
   "pt|graphs/pt.json|$ajar"
   "restir_pt|graphs/restir_pt.json|$ajar"
@@ -64,6 +67,9 @@ configs=(
   "splat|graphs/splat.json|$fine"
   "splat_backup|graphs/splat_backup.json|$fine"
   "splat_motion_blur|graphs/splat_motion_blur.json|$fine"
+  "poisson_l2_cg50|graphs/poisson_pt.json|$cornell|--set poisson.iterations=50"
+  "poisson_l2_mg4|graphs/poisson_pt.json|$cornell|--set poisson.linearSolver=multigrid --set poisson.iterations=4"
+  "poisson_l1_cg20x50|graphs/poisson_pt.json|$cornell|--set poisson.solver=l1"
 )
 
 passes_csv=$OUT/passes.csv
@@ -73,12 +79,14 @@ echo "config,graph,scene,width,height,frames,gpu_ms,wall_ms,mrays_per_s,status" 
 table="| config | scene | GPU ms/frame | wall ms/frame | Mrays/s | passes (GPU ms) |
 | --- | --- | --- | --- | --- | --- |"
 for c in "${configs[@]}"; do
-  IFS='|' read -r name graph scene <<<"$c"
+  IFS='|' read -r name graph scene extra <<<"$c"
+  read -r -a extra_args <<<"${extra:-}"
   [ -n "$scene" ] || continue
   log=$OUT/$name.log
   status=ok
   timeout "$STEP_S" "$LOOM" render "$graph" --scene "$scene" --width "$W" --height "$H" \
-    --frames "$FRAMES" --timings --quiet "${device[@]}" --out "$OUT/$name.png" >"$log" 2>&1 ||
+    --frames "$FRAMES" --timings --quiet "${device[@]}" ${extra_args[@]+"${extra_args[@]}"} \
+    --out "$OUT/$name.png" >"$log" 2>&1 ||
     status="failed ($?)"
   # The --timings table: "pass  ms" lines up to "total (GPU)", then "frame (wall)", then rays.
   awk -v cfg="$name" -v g="$graph" -v s="$scene" -v w="$W" -v h="$H" '
