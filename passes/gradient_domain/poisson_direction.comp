@@ -1,6 +1,6 @@
 #version 460
 // PoissonReconstruct, CG: p = z + beta p, beta = (r.z)_k / (r.z)_(k-1); p = z on a solve's
-// first step. Then the partial sums for nothing (the next kernel computes p.Ap).
+// first step. No dot product here: poisson_apply sums p.Ap right after.
 #include "passes/gradient_domain/poisson_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
