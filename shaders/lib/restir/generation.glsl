@@ -25,6 +25,8 @@ struct GenState {
     vec2 rc_bary;
     vec3 rc_dir;      // omega_k once sampled
     float p_mixed;    // density of x_k (area) times the suffix sampling pdfs so far
+    float p_rc;       // the factors of p_mixed that depend on x_{k-1}: x_k's density and,
+                      // once sampled, that of x_k's successor (restir_reconnection_pdf)
     vec3 suffix_f;    // product of f at x_{k+1} .. x_{j-1}
 };
 
@@ -40,12 +42,23 @@ void path_sample_set_rc(inout PathSample s, uint flags, uint rc_id, vec2 rc_bary
 
 // C = F / p_mixed (the integrand over the sampling density); rr_weight = 1 / (Russian roulette
 // survival probabilities): part of the source density, never of F.
-void restir_stream_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, vec3 C,
-                             float p_mixed, float inv_candidates, float rr_weight) {
+// p_rc: the factors of p_mixed that a shift to another pixel changes (GenState.p_rc; 1 without
+// a reconnection vertex).
+//
+// A kernel that does something else with the candidates than RIS defines
+// RESTIR_CANDIDATE_CALLBACK before including this file and its own restir_candidate() with this
+// signature (G-PT, passes/gradient_domain/gpt.comp, shifts each one to the neighbouring pixels).
+#ifdef RESTIR_CANDIDATE_CALLBACK
+void restir_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, vec3 C,
+                      float p_mixed, float p_rc, float inv_candidates, float rr_weight);
+#else
+void restir_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, vec3 C,
+                      float p_mixed, float p_rc, float inv_candidates, float rr_weight) {
     float w = luminance(C) * inv_candidates * rr_weight;
     vec3 F = C * p_mixed;
     reservoir_add(r, s, F, luminance(F), w, rng_next(rng_sel));
 }
+#endif
 
 // Returns the number of rays traced. Russian roulette from vertex rr_depth on, only once the
 // reconnection vertex x_k is behind: the suffix after x_k is never replayed (shifts keep its
@@ -66,6 +79,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
     g.rc_bary = vec2(0.0);
     g.rc_dir = vec3(0.0);
     g.p_mixed = 1.0;
+    g.p_rc = 1.0;
     g.suffix_f = vec3(1.0);
     PathSample s;
     s.seed = seed;
@@ -92,7 +106,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                     uint kind = l.type == LIGHT_TRIANGLE ? RC_SURFACE
                               : (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) ? RC_POINT : RC_DIRECTION;
                     s.light_pdf = ls.pdf;
-                    float p_mixed;
+                    float p_mixed, p_rc;
                     if (g.k != 0u) {
                         // k == n-1: the last MIS weight is re-evaluated by the shift.
                         bool last = g.k == j;
@@ -100,6 +114,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                                            g.rc_id, g.rc_bary, last ? ls.wi : g.rc_dir,
                                            last ? ls.Li : g.suffix_f * f * ls.Li * w);
                         p_mixed = g.p_mixed * ls.pdf;
+                        p_rc = last ? g.p_rc * ls.pdf : g.p_rc;
                     } else if (restir_reconnectable(cfg, j + 1u, rough_j, true, ls.dist)) {
                         // The light vertex itself is the reconnection vertex.
                         bool tri = kind == RC_SURFACE;
@@ -115,12 +130,14 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                             float cos_l = abs(dot(normalize(cross(b - a, c - a)), ls.wi));
                             p_mixed *= cos_l / (ls.dist * ls.dist);
                         }
+                        p_rc = p_mixed;
                     } else {
                         path_sample_set_rc(s, path_pack_flags(j + 1u, 0u, true, RC_SURFACE, ls.is_delta),
                                            0u, vec2(0.0), vec3(0.0), vec3(0.0));
                         p_mixed = 1.0;
+                        p_rc = 1.0;
                     }
-                    restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates, rr_weight);
+                    restir_candidate(r, rng_sel, s, C, p_mixed, p_rc, inv_candidates, rr_weight);
                 }
             }
         }
@@ -156,32 +173,39 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
             float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
             vec3 C = beta_next * Le * w;
             s.light_pdf = light_pdf;
-            float p_mixed;
+            float p_mixed, p_rc;
             if (g.k != 0u) {
                 bool last = g.k == j;
                 path_sample_set_rc(s, path_pack_flags(j + 1u, g.k, false, g.kind, false), g.rc_id,
                                    g.rc_bary, last ? dn : g.rc_dir,
                                    last ? Le : g.suffix_f * bs.f * Le * w);
                 p_mixed = g.p_mixed * bs.pdf;
+                p_rc = last ? g.p_rc * bs.pdf : g.p_rc;
             } else if (!delta && restir_reconnectable(cfg, j + 1u, rough_j, true, dist)) {
                 uint kind = found ? RC_SURFACE : RC_DIRECTION;
                 path_sample_set_rc(s, path_pack_flags(j + 1u, j + 1u, false, kind, false),
                                    found ? hit.prim : scene_info.counts.w,
                                    found ? hit.bary : vec2(0.0), dn, vec3(0.0));
                 p_mixed = bs.pdf * (found ? cos_next / (dist * dist) : 1.0);
+                p_rc = p_mixed;
             } else {
                 path_sample_set_rc(s, path_pack_flags(j + 1u, 0u, false, RC_SURFACE, false), 0u,
                                    vec2(0.0), vec3(0.0), vec3(0.0));
                 p_mixed = 1.0;
+                p_rc = 1.0;
             }
-            restir_stream_candidate(r, rng_sel, s, C, p_mixed, inv_candidates, rr_weight);
+            restir_candidate(r, rng_sel, s, C, p_mixed, p_rc, inv_candidates, rr_weight);
         }
         if (!found || j == cfg.max_bounces) break;
 
         // Advance the reconnection bookkeeping to x_{j+1}.
         if (g.k != 0u) {
-            if (g.k == j) g.rc_dir = dn;
-            else g.suffix_f *= bs.f;
+            if (g.k == j) {
+                g.rc_dir = dn;
+                g.p_rc *= bs.pdf;
+            } else {
+                g.suffix_f *= bs.f;
+            }
             g.p_mixed *= bs.pdf;
         } else if (!delta && restir_reconnectable(cfg, j + 1u, rough_j,
                                                   restir_vertex_rough(sn.mat, cfg.rough_threshold), dist)) {
@@ -190,6 +214,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
             g.rc_id = hit.prim;
             g.rc_bary = hit.bary;
             g.p_mixed = bs.pdf * cos_next / (dist * dist);
+            g.p_rc = g.p_mixed;
         }
         beta = beta_next;
         d = dn;

@@ -53,7 +53,26 @@ struct Reconnection {
     vec3 G_Le;        // k == n: what the light contributes to the segment (Le * G or I / d^2)
     float light_pdf;
     float bsdf_pdf;   // at y towards x_k
+    float p_rc;       // restir_reconnection_pdf: x_k's density from y and its successor's
 };
+
+// The factors of the offset path's density (GenState.p_rc's, mixed measure) that depend on its
+// predecessor y of x_k: the density of x_k (area; solid angle for a light direction) and, when
+// the path continues past x_k, that of x_k's successor. The rest of the suffix is the base
+// path's. G-PT's MIS weights between a pixel's paths and its neighbours' shifted ones need it.
+float restir_reconnection_pdf(PathSample s, ShadingPoint sy, vec3 wo, vec3 wi, Reconnection rc,
+                              float dist) {
+    uint n = path_length(s), k = path_rc_index(s), kind = path_rc_kind(s);
+    float G = kind == RC_SURFACE ? abs(dot(rc.sk.sp.ng, rc.dir)) / (dist * dist) : 1.0;
+    if (k == n) {
+        // Light sampling's density of a point or direction light does not depend on y.
+        if (path_last_nee(s)) return kind == RC_SURFACE ? rc.light_pdf * G : s.light_pdf;
+        return bsdf_pdf(sy.mat, wo, wi) * G;
+    }
+    float p = bsdf_pdf(sy.mat, wo, wi) * G;
+    if (k + 1u == n && path_last_nee(s)) return p * s.light_pdf;
+    return p * bsdf_pdf(rc.sk.mat, shading_to_local(rc.sk, -rc.dir), shading_to_local(rc.sk, s.rc_dir));
+}
 
 bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, vec3 d,
                             out Reconnection rc, out ShadowRay ray) {
@@ -106,6 +125,7 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
     rc.f = bsdf_eval(sy.mat, wo, wi);
     if (all(equal(rc.f, vec3(0.0))) || all(equal(rc.G_Le, vec3(0.0)))) return false;
     rc.bsdf_pdf = k == n ? bsdf_pdf(sy.mat, wo, wi) : 0.0;
+    rc.p_rc = restir_reconnection_pdf(s, sy, wo, wi, rc, dist);
     return true;
 }
 
@@ -130,8 +150,11 @@ const uint SHIFT_STEP_LAST_BSDF = 3u;  // pure replay: the last vertex is its BS
 
 // Every ray of a shift goes through the one traversal in the loop below (lavapipe compiles each
 // inlined BVH traversal separately: code size is speed).
-vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
+// p_rc: the offset path's restir_reconnection_pdf (1 for pure random replay, whose densities in
+// primary sample space are the base path's).
+vec3 restir_shift_with_pdf(RestirSettings cfg, PathSample s, PrimaryHit dst, out float p_rc) {
     uint n = path_length(s), k = path_rc_index(s);
+    p_rc = 1.0;
     if (n < 2u || !primary_valid(dst)) return vec3(0.0);
     bool reconnect = k != 0u;
     if (reconnect) atomicAdd(shift_attempts_reconnect, 1u);
@@ -161,6 +184,7 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
         if (step == SHIFT_STEP_RECONNECT) {
             if (!restir_reconnectable(cfg, k, rough_j, true, 1e30)) break;
             if (!restir_reconnect_begin(cfg, s, sh, d, rc, shadow)) break;
+            p_rc = rc.p_rc;
         } else if (step == SHIFT_STEP_LAST_NEE) {
             if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
             nee = nee_sample(sh, wo, u_light, true, cfg.mis_heuristic);
@@ -225,6 +249,11 @@ vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
         else atomicAdd(shift_success_replay, 1u);
     }
     return ok ? result : vec3(0.0);
+}
+
+vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
+    float p_rc;
+    return restir_shift_with_pdf(cfg, s, dst, p_rc);
 }
 
 #endif
