@@ -1,0 +1,120 @@
+// GradientPathTracer: gradient-domain path tracing (Kettunen et al. 2015) with ReSTIR PT's
+// hybrid shift; the G-PT baseline of gradient-domain ReSTIR PT (Wang et al. 2025). See
+// README.md.
+#include <algorithm>
+
+#include "core/gpu/CounterBuffer.h"
+#include "core/graph/KernelParams.h"
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+#include "passes/restir_pt/PathReservoir.h"
+
+namespace loom {
+
+namespace {
+constexpr uint64_t kGptPixelBytes = 10 * 16;  // GptPixel, gpt.comp
+}
+
+class GradientPathTracerPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.outputTexture("primal", gpu::Format::RGBA32F)
+            .doc("MIS-weighted primal estimate, without the emission seen at the primary hit");
+        r.outputTexture("dx", gpu::Format::RGBA32F)
+            .doc(
+                "two-sided estimate of I(p + e_x) - I(p), without that emission; 0 in the last "
+                "column");
+        r.outputTexture("dy", gpu::Format::RGBA32F)
+            .doc(
+                "two-sided estimate of I(p + e_y) - I(p), without that emission; 0 in the last "
+                "row");
+        r.outputTexture("direct", gpu::Format::RGBA32F)
+            .doc(
+                "emission seen at the primary hit (environment on a miss), added back after the "
+                "solve");
+        r.outputTexture("color", gpu::Format::RGBA32F).optional().doc("primal + direct");
+        r.scratchBuffer("pixels")
+            .bytesPerPixel(kGptPixelBytes)
+            .doc(
+                "per pixel: weighted primal, four neighbour shares, four one-sided gradients, "
+                "emission");
+        r.param("samplesPerPixel", 1).range(1, 4096).doc("base paths per pixel per frame");
+        r.param("maxBounces", 9).range(1, 14).doc("scattering events per path (PathTracer's)");
+        r.paramEnum("shift", "hybrid", shaderEnum("SHIFT"))
+            .doc("shift of the base path to the neighbours (ReSTIR PT's, Lin et al. Sec. 6)");
+        r.param("roughnessThreshold", 0.2)
+            .range(0, 1)
+            .doc(
+                "hybrid shift: both reconnection endpoints need linear roughness sqrt(alpha) above "
+                "this");
+        r.param("distanceThreshold", 0.1)
+            .min(0)
+            .doc("hybrid shift: minimum reconnection segment length");
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
+            .doc("NEE/BSDF MIS inside a path, as PathTracer");
+        r.param("motionBlur", false)
+            .doc(
+                "sample a shutter time per base path (replayed by its offset paths): camera motion "
+                "blur");
+        r.paramEnum("ablation", "none", {"none", "flipGradientSign", "halfWeights"})
+            .doc(
+                "biased variants the tests must detect: the gradient's sign flipped; MIS weights "
+                "1/2 for every pair, also where the shift fails");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mTrace = compileKernel(*this, shaders, "passes/gradient_domain/gpt.comp");
+        for (int color = 0; color < 2; ++color)
+            mResolve[color] =
+                compileKernel(*this, shaders, "passes/gradient_domain/gpt_resolve.comp",
+                              {{"HAS_COLOR", color ? "1" : "0"}});
+    }
+    void execute(ExecuteContext& ctx) override {
+        bool color = ctx.has("color");
+        auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
+        auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
+        auto pixels = ctx.scratchBuffer("pixels");
+        gpu::Bindings b;
+        ctx.scene().bind(b);
+        b.set("GptPixels", pixels).set("RayCounter", rayCounter).set("RestirCounters", counters);
+        // One dispatch per base path: each shifts its sub-paths four times, which keeps an
+        // invocation's traversal steps far below lavapipe's loop limit (bvh.glsl).
+        uint32_t spp = uint32_t(param<int>("samplesPerPixel"));
+        for (uint32_t s = 0; s < spp; ++s) {
+            if (s > 0) ctx.cmd().barrier();
+            KernelParams(*this, *mTrace, ctx)
+                .set("sampleIndex", s)
+                .dispatch(ctx, b, ctx.width(), ctx.height());
+        }
+        ctx.cmd().barrier();
+        gpu::Bindings rb;
+        rb.set("GptPixels", pixels)
+            .set("primalImage", ctx.texture("primal"))
+            .set("dxImage", ctx.texture("dx"))
+            .set("dyImage", ctx.texture("dy"))
+            .set("directImage", ctx.texture("direct"));
+        if (color) rb.set("colorImage", ctx.texture("color"));
+        KernelParams(*this, *mResolve[color], ctx).dispatch(ctx, rb, ctx.width(), ctx.height());
+    }
+    void frameCompleted(gpu::Context& gpu) override {
+        mRayCounter.read(gpu);
+        mCounters.read(gpu);
+    }
+    std::map<std::string, double> stats() const override {
+        auto s = mCounters.stats();
+        s["shiftRays"] = s["rays"];
+        s["rays"] = mRayCounter[0] + s["shiftRays"];
+        s["maxTraversalSteps"] = std::max<double>(mRayCounter[1], s["maxTraversalSteps"]);
+        return s;
+    }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mTrace, mResolve[2];
+    gpu::CounterBuffer<2> mRayCounter{"RayCounter"};
+    restir::ShiftCounters mCounters;
+};
+
+LOOM_REGISTER_PASS(GradientPathTracerPass, "GradientPathTracer",
+                   "Gradient-domain path tracing (Kettunen 2015): base paths shifted to the 4 "
+                   "neighbours by the hybrid shift, two-sided gradients and MIS primal");
+
+}  // namespace loom
