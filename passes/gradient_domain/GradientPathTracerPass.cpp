@@ -12,7 +12,7 @@
 namespace loom {
 
 namespace {
-constexpr uint64_t kGptPixelBytes = 10 * 16;  // GptPixel, gpt.comp
+constexpr uint64_t kGradientPixelBytes = 10 * 16;  // GradientPixel, gradient_pixels.glsl
 }
 
 class GradientPathTracerPass : public Pass {
@@ -34,7 +34,7 @@ public:
                 "solve");
         r.outputTexture("color", gpu::Format::RGBA32F).optional().doc("primal + direct");
         r.scratchBuffer("pixels")
-            .bytesPerPixel(kGptPixelBytes)
+            .bytesPerPixel(kGradientPixelBytes)
             .doc(
                 "per pixel: weighted primal, four neighbour shares, four one-sided gradients, "
                 "emission");
@@ -75,7 +75,9 @@ public:
         auto pixels = ctx.scratchBuffer("pixels");
         gpu::Bindings b;
         ctx.scene().bind(b);
-        b.set("GptPixels", pixels).set("RayCounter", rayCounter).set("RestirCounters", counters);
+        b.set("GradientPixels", pixels)
+            .set("RayCounter", rayCounter)
+            .set("RestirCounters", counters);
         // One dispatch per base path: each shifts its sub-paths four times, which keeps an
         // invocation's traversal steps far below lavapipe's loop limit (bvh.glsl).
         uint32_t spp = uint32_t(param<int>("samplesPerPixel"));
@@ -87,7 +89,7 @@ public:
         }
         ctx.cmd().barrier();
         gpu::Bindings rb;
-        rb.set("GptPixels", pixels)
+        rb.set("GradientPixels", pixels)
             .set("primalImage", ctx.texture("primal"))
             .set("dxImage", ctx.texture("dx"))
             .set("dyImage", ctx.texture("dy"))

@@ -19,17 +19,13 @@
 #include "lib/restir/generation.glsl"
 #include "lib/restir/hybrid_shift.glsl"
 #include "lib/restir/primary.glsl"
+#include "passes/gradient_domain/gradient_pixels.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// One pixel's sums over this frame's samples; gpt_resolve.comp gathers them.
-struct GptPixel {
-    vec4 primal;        // sum_d w_d f / p / 4
-    vec4 neighbour[4];  // direction d's neighbour's primal share, w_d f' / p / 4
-    vec4 gradient[4];   // w_d (f' - f) / p: I(neighbour d) - I(here)
-    vec4 direct;        // emission at the primary hit
-};
-layout(std430) buffer GptPixels { GptPixel gpt_pixels[]; };
+// One pixel's sums over this frame's samples (primal: sum_d w_d f / p / 4; neighbour shares
+// w_d f' / p / 4; gradients w_d (f' - f) / p); gpt_resolve.comp gathers them.
+layout(std430) buffer GradientPixels { GradientPixel gradient_pixels[]; };
 layout(std430) buffer RayCounter {
     uint ray_count;
     uint max_bvh_iterations;
@@ -48,8 +44,6 @@ layout(push_constant) uniform Params {
     uint motionBlur;
     uint ablation;  // ABLATION_*: biased variants for the tests
 } pc;
-
-const ivec2 kGptOffsets[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
 
 // The invocation's state for restir_candidate (generation.glsl's callback).
 RestirSettings g_cfg;
@@ -104,8 +98,8 @@ void main() {
     PrimaryHit ph = restir_trace_primary(pose, ivec2(pixel), film_lens, pc.frameSize);
     uint rays = 1u;
     for (uint d = 0u; d < 4u; ++d) {
-        ivec2 q = ivec2(pixel) + kGptOffsets[d];
-        g_inside[d] = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(pc.frameSize)));
+        ivec2 q = ivec2(pixel) + kGradientOffsets[d];
+        g_inside[d] = gradient_inside(q, pc.frameSize);
         if (g_inside[d]) {
             g_neighbour[d] = restir_trace_primary(pose, q, film_lens, pc.frameSize);
             ++rays;
@@ -130,7 +124,7 @@ void main() {
     uvec4 seed = rng_init(pixel, pc.frameIndex, stream ^ 0x9E3779B1u).state;
     rays += restir_generate(g_cfg, ph, seed, film_lens, time, 1.0, 64u, unused, rng);
 
-    GptPixel o;
+    GradientPixel o;
     o.primal = vec4(0.25 * g_primal, 0.0);
     for (uint d = 0u; d < 4u; ++d) {
         o.neighbour[d] = vec4(0.25 * g_share[d], 0.0);
@@ -138,7 +132,7 @@ void main() {
     }
     o.direct = vec4(direct, 0.0);
     if (pc.sampleIndex != 0u) {
-        GptPixel a = gpt_pixels[idx];
+        GradientPixel a = gradient_pixels[idx];
         o.primal += a.primal;
         for (uint d = 0u; d < 4u; ++d) {
             o.neighbour[d] += a.neighbour[d];
@@ -146,7 +140,7 @@ void main() {
         }
         o.direct += a.direct;
     }
-    gpt_pixels[idx] = o;
+    gradient_pixels[idx] = o;
     atomicAdd(ray_count, rays);
     atomicMax(max_bvh_iterations, bvh_iterations);
 }

@@ -1,0 +1,84 @@
+// GradientAfterReSTIR: image gradients from a ReSTIR PT / Area ReSTIR frame's final reservoirs,
+// each pixel's sample shifted to its four neighbours; the gradient-after-ReSTIR baseline of
+// gradient-domain ReSTIR PT (Wang et al. 2025). See README.md.
+#include "core/graph/KernelParams.h"
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+#include "passes/restir_pt/PathReservoir.h"
+
+namespace loom {
+
+namespace {
+constexpr uint64_t kGradientPixelBytes = 10 * 16;  // GradientPixel, gradient_pixels.glsl
+}
+
+class GradientAfterReSTIRPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputBuffer("reservoirs")
+            .doc("final path reservoirs of the frame (ReSTIRPTSpatial.reservoirsOut)");
+        r.inputBuffer("primary").doc("ReSTIRPTInitial.primary: the pixels' primary hits");
+        r.outputTexture("primal", gpu::Format::RGBA32F)
+            .doc("the reservoirs' estimate F W, without the emission seen at the primary hit");
+        r.outputTexture("dx", gpu::Format::RGBA32F)
+            .doc(
+                "two-sided estimate of I(p + e_x) - I(p), without that emission; 0 in the last "
+                "column");
+        r.outputTexture("dy", gpu::Format::RGBA32F)
+            .doc(
+                "two-sided estimate of I(p + e_y) - I(p), without that emission; 0 in the last "
+                "row");
+        r.outputTexture("direct", gpu::Format::RGBA32F)
+            .doc(
+                "emission seen at the primary hit (environment on a miss), added back after the "
+                "solve");
+        r.outputTexture("color", gpu::Format::RGBA32F).optional().doc("primal + direct");
+        r.scratchBuffer("pixels")
+            .bytesPerPixel(kGradientPixelBytes)
+            .doc("per pixel: primal, four one-sided gradients, emission (gradient_pixels.glsl)");
+        r.paramEnum("ablation", "none", {"none", "flipGradientSign"})
+            .doc("biased variant the tests must detect: the gradient's sign flipped");
+    }
+    void compile(ShaderLibrary& shaders) override {
+        mShift = compileKernel(*this, shaders, "passes/gradient_domain/gradient_after_restir.comp");
+        for (int color = 0; color < 2; ++color)
+            mResolve[color] =
+                compileKernel(*this, shaders, "passes/gradient_domain/gpt_resolve.comp",
+                              {{"HAS_COLOR", color ? "1" : "0"}});
+    }
+    void execute(ExecuteContext& ctx) override {
+        auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
+        auto pixels = ctx.scratchBuffer("pixels");
+        gpu::Bindings b;
+        ctx.scene().bind(b);
+        b.set("ReservoirsIn", ctx.buffer("reservoirs"))
+            .set("PrimaryIn", ctx.buffer("primary"))
+            .set("GradientPixels", pixels)
+            .set("RestirCounters", counters);
+        KernelParams(*this, *mShift, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
+        ctx.cmd().barrier();
+        bool color = ctx.has("color");
+        gpu::Bindings rb;
+        rb.set("GradientPixels", pixels)
+            .set("primalImage", ctx.texture("primal"))
+            .set("dxImage", ctx.texture("dx"))
+            .set("dyImage", ctx.texture("dy"))
+            .set("directImage", ctx.texture("direct"));
+        if (color) rb.set("colorImage", ctx.texture("color"));
+        KernelParams(*this, *mResolve[color], ctx)
+            .set("samplesPerPixel", 1u)
+            .dispatch(ctx, rb, ctx.width(), ctx.height());
+    }
+    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
+    std::map<std::string, double> stats() const override { return mCounters.stats(); }
+
+private:
+    std::shared_ptr<gpu::ComputePipeline> mShift, mResolve[2];
+    restir::ShiftCounters mCounters;
+};
+
+LOOM_REGISTER_PASS(GradientAfterReSTIRPass, "GradientAfterReSTIR",
+                   "Gradients after ReSTIR: each pixel's final reservoir sample shifted to its 4 "
+                   "neighbours, balance weights on the targets, two-sided sums");
+
+}  // namespace loom
