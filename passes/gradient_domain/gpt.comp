@@ -62,11 +62,11 @@ void restir_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, ve
             g_primal += C;
             continue;
         }
-        float p_rc_offset;
-        vec3 F_offset = restir_shift_with_pdf(g_cfg, s, g_neighbour[d], p_rc_offset);
+        ShiftDensity offset;
+        vec3 F_offset = restir_shift_with_density(g_cfg, s, g_neighbour[d], offset);
         // p' / p. A failed shift (or an offset path of zero contribution, which the neighbour's
         // own sampler never scores either) leaves the base path alone: w = 1.
-        float ratio = any(greaterThan(F_offset, vec3(0.0))) ? p_rc_offset / p_rc : 0.0;
+        float ratio = any(greaterThan(F_offset, vec3(0.0))) ? offset.p_rc / p_rc : 0.0;
         if (!(ratio < 1e30)) continue;  // the neighbour's technique takes it all: w = 0
         float w = pc.ablation == ABLATION_HALF_WEIGHTS ? 0.5 : 1.0 / (1.0 + ratio);
         vec3 share = F_offset * (w / p_mixed);
@@ -109,15 +109,6 @@ void main() {
     }
     g_primal = vec3(0.0);
 
-    vec3 direct = vec3(0.0);
-    if (primary_valid(ph)) {
-        ShadingPoint sh = restir_primary_shading(ph);
-        if (any(greaterThan(sh.emission, vec3(0.0))))
-            direct = emitted_radiance(sh.sp.shape, sh.sp.ng, normalize(sh.sp.p - ph.camera.xyz));
-    } else {
-        direct = environment_radiance(uintBitsToFloat(ph.hit.yzw));
-    }
-
     // No Russian roulette (rrDepth past the last vertex): the survival probability would be a
     // factor of the base path's density that the neighbour's sampler does not share.
     PathReservoir unused = reservoir_empty();
@@ -130,7 +121,7 @@ void main() {
         o.neighbour[d] = vec4(0.25 * g_share[d], 0.0);
         o.gradient[d] = vec4(g_gradient[d], 0.0);
     }
-    o.direct = vec4(direct, 0.0);
+    o.direct = vec4(restir_primary_emission(ph), 0.0);
     if (pc.sampleIndex != 0u) {
         GradientPixel a = gradient_pixels[idx];
         o.primal += a.primal;

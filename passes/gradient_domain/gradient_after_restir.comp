@@ -40,15 +40,7 @@ void main() {
         o.gradient[d] = vec4(0.0);
     }
     PrimaryHit ph = primary_in[idx];
-    vec3 direct = vec3(0.0);
-    if (primary_valid(ph)) {
-        ShadingPoint sh = restir_primary_shading(ph);
-        if (any(greaterThan(sh.emission, vec3(0.0))))
-            direct = emitted_radiance(sh.sp.shape, sh.sp.ng, normalize(sh.sp.p - ph.camera.xyz));
-    } else {
-        direct = environment_radiance(uintBitsToFloat(ph.hit.yzw));
-    }
-    o.direct = vec4(direct, 0.0);
+    o.direct = vec4(restir_primary_emission(ph), 0.0);
 
     PathReservoir r = reservoirs_in[idx];
     if (r.W > 0.0) {

@@ -28,12 +28,12 @@ void restir_candidate(inout PathReservoir r, inout Rng rng_sel, PathSample s, ve
     // Candidates of zero contribution (e.g. an environment hit with zero MIS weight) are not
     // sampled paths of the estimator: G-PT skips them.
     if (!any(greaterThan(C, vec3(0.0)))) return;
-    float p_self;
+    ShiftDensity self;
     vec3 F = C * p_mixed;
-    vec3 F_self = restir_shift_with_pdf(g_cfg, s, g_self, p_self);
+    vec3 F_self = restir_shift_with_density(g_cfg, s, g_self, self);
     g_counts.x += 1.0;
     if (any(greaterThan(abs(F_self - F), 1e-3 * max(F, vec3(1e-8))))) g_counts.y += 1.0;
-    if (!(abs(p_self - p_rc) <= 1e-3 * p_rc)) g_counts.z += 1.0;
+    if (!(abs(self.p_rc - p_rc) <= 1e-3 * p_rc)) g_counts.z += 1.0;
     if (path_rc_index(s) != 0u) g_counts.w += 1.0;
 }
 

@@ -54,6 +54,7 @@ struct Reconnection {
     float light_pdf;
     float bsdf_pdf;   // at y towards x_k
     float p_rc;       // restir_reconnection_pdf: x_k's density from y and its successor's
+    float G;          // |cos at x_k| / d^2 of the segment y -> x_k (surface kind), else 1
 };
 
 // The factors of the offset path's density (GenState.p_rc's, mixed measure) that depend on its
@@ -81,6 +82,7 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
     uint kind = path_rc_kind(s);
     float dist;
     rc.light_pdf = 0.0;
+    rc.G = 1.0;
     if (kind == RC_SURFACE) {
         Hit h;
         h.t = 0.0;
@@ -97,6 +99,7 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
         rc.dir = v / dist;
         if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return false;
         float G = abs(dot(rc.sk.sp.ng, rc.dir)) / (dist * dist);
+        rc.G = G;
         if (k == n) {
             rc.G_Le = emitted_radiance(rc.sk.sp.shape, rc.sk.sp.ng, rc.dir) * G;
             rc.light_pdf = light_pdf_triangle(sy.sp.p, s.rc_id, rc.sk.sp.p, rc.sk.sp.ng);
@@ -148,13 +151,19 @@ const uint SHIFT_STEP_RECONNECT = 1u;  // visibility y_{k-1} -> x_k
 const uint SHIFT_STEP_LAST_NEE = 2u;   // pure replay: the last vertex is x_{n-1}'s NEE sample
 const uint SHIFT_STEP_LAST_BSDF = 3u;  // pure replay: the last vertex is its BSDF sample
 
+// What a shift knows about the offset path's reconnection besides its integrand.
+struct ShiftDensity {
+    float p_rc;  // restir_reconnection_pdf (1 for pure random replay, whose densities in primary
+                 // sample space are the base path's)
+    float G_rc;  // Reconnection.G: the area-to-solid-angle factor at x_k (1 without a surface x_k)
+};
+
 // Every ray of a shift goes through the one traversal in the loop below (lavapipe compiles each
 // inlined BVH traversal separately: code size is speed).
-// p_rc: the offset path's restir_reconnection_pdf (1 for pure random replay, whose densities in
-// primary sample space are the base path's).
-vec3 restir_shift_with_pdf(RestirSettings cfg, PathSample s, PrimaryHit dst, out float p_rc) {
+vec3 restir_shift_with_density(RestirSettings cfg, PathSample s, PrimaryHit dst, out ShiftDensity sd) {
     uint n = path_length(s), k = path_rc_index(s);
-    p_rc = 1.0;
+    sd.p_rc = 1.0;
+    sd.G_rc = 1.0;
     if (n < 2u || !primary_valid(dst)) return vec3(0.0);
     bool reconnect = k != 0u;
     if (reconnect) atomicAdd(shift_attempts_reconnect, 1u);
@@ -184,7 +193,8 @@ vec3 restir_shift_with_pdf(RestirSettings cfg, PathSample s, PrimaryHit dst, out
         if (step == SHIFT_STEP_RECONNECT) {
             if (!restir_reconnectable(cfg, k, rough_j, true, 1e30)) break;
             if (!restir_reconnect_begin(cfg, s, sh, d, rc, shadow)) break;
-            p_rc = rc.p_rc;
+            sd.p_rc = rc.p_rc;
+            sd.G_rc = rc.G;
         } else if (step == SHIFT_STEP_LAST_NEE) {
             if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u) break;
             nee = nee_sample(sh, wo, u_light, true, cfg.mis_heuristic);
@@ -252,8 +262,8 @@ vec3 restir_shift_with_pdf(RestirSettings cfg, PathSample s, PrimaryHit dst, out
 }
 
 vec3 restir_shift(RestirSettings cfg, PathSample s, PrimaryHit dst) {
-    float p_rc;
-    return restir_shift_with_pdf(cfg, s, dst, p_rc);
+    ShiftDensity sd;
+    return restir_shift_with_density(cfg, s, dst, sd);
 }
 
 #endif

@@ -5,6 +5,7 @@
 #define LOOM_RESTIR_PRIMARY_GLSL
 
 #include "lib/camera.glsl"
+#include "lib/lights.glsl"
 #include "lib/restir/reservoir.glsl"
 #include "lib/shading.glsl"
 
@@ -39,6 +40,15 @@ ShadingPoint restir_primary_shading(PrimaryHit ph) {
     h.prim = ph.hit.x;
     h.bary = uintBitsToFloat(ph.hit.yz);
     return shading_point(h);
+}
+
+// The emission seen at the primary hit (the environment on a miss): ReSTIR's path samples start
+// after it, so every consumer of the reservoirs adds it apart.
+vec3 restir_primary_emission(PrimaryHit ph) {
+    if (!primary_valid(ph)) return environment_radiance(uintBitsToFloat(ph.hit.yzw));
+    ShadingPoint sh = restir_primary_shading(ph);
+    if (!any(greaterThan(sh.emission, vec3(0.0)))) return vec3(0.0);
+    return emitted_radiance(sh.sp.shape, sh.sp.ng, normalize(sh.sp.p - ph.camera.xyz));
 }
 
 // Geometric similarity of two primary hits (a technique-set choice, independent of samples, so
