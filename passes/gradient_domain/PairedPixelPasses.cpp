@@ -11,6 +11,7 @@ namespace loom {
 namespace {
 constexpr uint64_t kPairSettingsBytes = 48;    // PairSettings
 constexpr uint64_t kPairSlotsBytes = 4 * 112;  // PairSlots: 4 PairReservoir
+constexpr uint64_t kPixelFeaturesBytes = 32;   // PixelFeatures
 
 // The G-buffer tests both reuse passes apply to pixels of pairs (paired_pixel.glsl).
 void reflectPixelTests(PassReflection& r) {
@@ -33,6 +34,9 @@ public:
         r.outputBuffer("pairs")
             .bytesPerPixel(kPairSlotsBytes, kPairSettingsBytes)
             .doc("paired-pixel reservoirs: per pixel the +x and +y pairs, a reservoir per sign");
+        r.outputBuffer("features")
+            .bytesPerPixel(kPixelFeaturesBytes)
+            .doc("the pixels' normal, depth and albedo for the reuse passes' tests");
         r.param("positivization", true)
             .doc(
                 "separate reservoirs for the pair integrand's positive and negative parts, never "
@@ -52,6 +56,7 @@ public:
         b.set("ReservoirsIn", ctx.buffer("reservoirs"))
             .set("PrimaryIn", ctx.buffer("primary"))
             .set("PairsOut", ctx.buffer("pairs"))
+            .set("FeaturesOut", ctx.buffer("features"))
             .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
         KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
@@ -74,6 +79,11 @@ public:
         r.inputBuffer("prevPrimary")
             .previousFrame()
             .doc("last frame's primary hits: connect ReSTIRPTInitial.primary");
+        r.inputBuffer("features")
+            .doc("the pixels' G-buffer features (PairedPixelInitial.features)");
+        r.inputBuffer("prevFeatures")
+            .previousFrame()
+            .doc("last frame's features: connect PairedPixelInitial.features");
         r.inputTexture("motion", gpu::Format::RG32F).doc("GBuffer.motion (pixels)");
         r.outputBuffer("pairsOut")
             .bytesPerPixel(kPairSlotsBytes, kPairSettingsBytes)
@@ -94,6 +104,8 @@ public:
             .set("PairsOut", ctx.buffer("pairsOut"))
             .set("PrimaryIn", ctx.buffer("primary"))
             .set("PrevPrimary", ctx.buffer("prevPrimary"))
+            .set("FeaturesIn", ctx.buffer("features"))
+            .set("PrevFeatures", ctx.buffer("prevFeatures"))
             .set("motionImage", ctx.texture("motion"))
             .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
         KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
@@ -111,6 +123,8 @@ public:
     void reflect(PassReflection& r) const override {
         r.inputBuffer("pairs").doc("pair reservoirs to reuse between (after temporal reuse)");
         r.inputBuffer("primary").doc("this frame's primary hits (ReSTIRPTInitial.primary)");
+        r.inputBuffer("features")
+            .doc("the pixels' G-buffer features (PairedPixelInitial.features)");
         r.outputBuffer("pairsOut")
             .bytesPerPixel(kPairSlotsBytes, kPairSettingsBytes)
             .doc("pair reservoirs after the last round");
@@ -151,6 +165,7 @@ public:
             b.set("PairsIn", in)
                 .set("PairsOut", dst)
                 .set("PrimaryIn", ctx.buffer("primary"))
+                .set("FeaturesIn", ctx.buffer("features"))
                 .set("RestirCounters", counters);
             KernelParams(*this, *mPipeline, ctx)
                 .set("round", uint32_t(round))

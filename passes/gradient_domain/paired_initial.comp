@@ -3,7 +3,8 @@
 // the pair (p, p + e) resamples the two pixels' initial path candidates (the same ones Area
 // ReSTIR's primal chain starts from), p's as (s, 0) and p + e's as (s, 1). Each candidate
 // (s, W) comes from its own half of the paired-pixel domain, so its resampling weight is
-// target * W with MIS weight 1. The inner shift evaluates each at its partner pixel.
+// target * W with MIS weight 1. The inner shift evaluates each at its partner pixel. Also writes
+// the pixels' G-buffer features for the reuse passes' tests.
 #include "passes/gradient_domain/paired_pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -16,6 +17,7 @@ layout(std430) writeonly buffer PairsOut {
     PairSettings pair_settings_out;
     PairSlots pairs_out[];
 };
+layout(std430) writeonly buffer FeaturesOut { PixelFeatures features_out[]; };
 
 layout(push_constant) uniform Params {
     uvec2 frameSize;
@@ -37,6 +39,7 @@ void main() {
     ps.measure = pc.measure;
     ps.pad0 = ps.pad1 = 0u;
     if (idx == 0u) pair_settings_out = ps;
+    features_out[idx] = pixel_features(primary_in[idx], false);
     bool solid_angle = ps.measure == PAIR_MEASURE_SOLID_ANGLE;
 
     // Evaluations: 2d + b = candidate b of direction d's pair at its partner; in the solid-angle

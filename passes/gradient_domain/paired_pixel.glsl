@@ -167,23 +167,40 @@ vec3 pair_eval(PairSettings ps, PairEval e, out float solid) {
     return F;
 }
 
-// Whether two primary hits look alike for gradient reuse: normals (cosine >= normal_threshold,
-// the paper's 0.9), relative camera distance and albedo (diffuse + specular reflectance, max
-// channel difference). Pairs whose two pixels are not alike are edge pairs.
-bool pair_pixels_alike(PrimaryHit a, bool a_previous, PrimaryHit b, bool b_previous,
-                       float normal_threshold, float depth_threshold, float albedo_threshold) {
-    if (!primary_valid(a) || !primary_valid(b)) return primary_valid(a) == primary_valid(b);
-    scene_select_frame(a_previous);
-    ShadingPoint sa = restir_primary_shading(a);
-    scene_select_frame(b_previous);
-    ShadingPoint sb = restir_primary_shading(b);
+// What the G-buffer tests of gradient reuse compare of a primary hit (computed once per pixel:
+// the edge-pair search compares hundreds of candidates).
+struct PixelFeatures {
+    vec3 n;        // shading normal (before normal mapping)
+    float depth;   // camera distance
+    vec3 albedo;   // diffuse + specular reflectance
+    uint valid;    // 0: a miss
+};
+
+PixelFeatures pixel_features(PrimaryHit h, bool previous) {
+    PixelFeatures f;
+    f.valid = primary_valid(h) ? 1u : 0u;
+    f.n = vec3(0.0);
+    f.depth = 0.0;
+    f.albedo = vec3(0.0);
+    if (f.valid == 0u) return f;
+    scene_select_frame(previous);
+    ShadingPoint sh = restir_primary_shading(h);
     scene_select_frame(false);
-    if (dot(sa.sp.ns, sb.sp.ns) < normal_threshold) return false;
-    float da = length(sa.sp.p - a.camera.xyz), db = length(sb.sp.p - b.camera.xyz);
-    if (abs(da - db) > depth_threshold * max(da, db)) return false;
-    vec3 albedo_a = sa.mat.diffuse.rgb + sa.mat.specular.rgb;
-    vec3 albedo_b = sb.mat.diffuse.rgb + sb.mat.specular.rgb;
-    vec3 diff = abs(albedo_a - albedo_b);
+    f.n = sh.sp.ns;
+    f.depth = length(sh.sp.p - h.camera.xyz);
+    f.albedo = sh.mat.diffuse.rgb + sh.mat.specular.rgb;
+    return f;
+}
+
+// Whether two pixels look alike for gradient reuse: normals (cosine >= normal_threshold, the
+// paper's 0.9), relative camera distance and albedo (max channel difference). Pairs whose two
+// pixels are not alike are edge pairs. Two misses are alike.
+bool features_alike(PixelFeatures a, PixelFeatures b, float normal_threshold,
+                    float depth_threshold, float albedo_threshold) {
+    if (a.valid == 0u || b.valid == 0u) return a.valid == b.valid;
+    if (dot(a.n, b.n) < normal_threshold) return false;
+    if (abs(a.depth - b.depth) > depth_threshold * max(a.depth, b.depth)) return false;
+    vec3 diff = abs(a.albedo - b.albedo);
     return max(diff.x, max(diff.y, diff.z)) <= albedo_threshold;
 }
 

@@ -23,6 +23,7 @@ layout(std430) writeonly buffer PairsOut {
     PairSlots pairs_out[];
 };
 layout(std430) readonly buffer PrimaryIn { PrimaryHit primary_in[]; };
+layout(std430) readonly buffer FeaturesIn { PixelFeatures features_in[]; };
 
 // Enums arrive as generated defines: OUTER_SHIFT_COPY / OUTER_SHIFT_PRIMARY_RECONNECT,
 // ABLATION_NONE / ABLATION_DROP_OUTER_JACOBIAN / ABLATION_REUSE_ACROSS_SIGNS.
@@ -43,19 +44,21 @@ layout(push_constant) uniform Params {
 
 uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 
-bool alike(ivec2 a, ivec2 b) {
-    return pair_pixels_alike(primary_in[pixel_index(a)], false, primary_in[pixel_index(b)], false,
-                             pc.normalThreshold, pc.depthThreshold, pc.albedoThreshold);
+bool alike(PixelFeatures a, PixelFeatures b) {
+    return features_alike(a, b, pc.normalThreshold, pc.depthThreshold, pc.albedoThreshold);
 }
 
-// The neighbour pair of direction d's pair at p, or false.
-bool pick_neighbour_pair(inout Rng rng, ivec2 p, uint d, out ivec2 q) {
-    bool edge = !alike(p, pair_pixel(p, d, 1u));
+PixelFeatures features_at(ivec2 q) { return features_in[pixel_index(q)]; }
+
+// The neighbour pair of direction d's pair at p (its pixels' features f0, f1), or false.
+bool pick_neighbour_pair(inout Rng rng, ivec2 p, uint d, PixelFeatures f0, PixelFeatures f1,
+                         out ivec2 q) {
+    bool edge = !alike(f0, f1);
     uint tries = pc.adaptiveSpatial != 0u && edge ? max(pc.edgeCandidates, 1u) : 1u;
     for (uint i = 0u; i < tries; ++i) {
         q = ivec2(vec2(p) + 0.5 + pc.radius * sample_disk_concentric(rng_next2(rng)));
         if (all(equal(q, p)) || !pair_inside(q, d, pc.frameSize)) continue;
-        if (alike(p, q) && alike(pair_pixel(p, d, 1u), pair_pixel(q, d, 1u))) return true;
+        if (alike(f0, features_at(q)) && alike(f1, features_at(pair_pixel(q, d, 1u)))) return true;
     }
     return false;
 }
@@ -102,8 +105,10 @@ void main() {
 
     ivec2 nq[2];
     bool has_q[2];
+    PixelFeatures f0 = features_at(p);
     for (uint d = 0u; d < 2u; ++d)
-        has_q[d] = pair_inside(p, d, pc.frameSize) && pick_neighbour_pair(rng, p, d, nq[d]);
+        has_q[d] = pair_inside(p, d, pc.frameSize) &&
+                   pick_neighbour_pair(rng, p, d, f0, features_at(pair_pixel(p, d, 1u)), nq[d]);
 
     PairEval evals[MAX_EVALS];
     bool run[MAX_EVALS];

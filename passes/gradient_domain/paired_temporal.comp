@@ -29,6 +29,8 @@ layout(std430) writeonly buffer PairsOut {
 };
 layout(std430) readonly buffer PrimaryIn { PrimaryHit primary_in[]; };
 layout(std430) readonly buffer PrevPrimary { PrimaryHit primary_prev[]; };
+layout(std430) readonly buffer FeaturesIn { PixelFeatures features_in[]; };
+layout(std430) readonly buffer PrevFeatures { PixelFeatures features_prev[]; };
 layout(rg32f) uniform readonly image2D motionImage;
 
 layout(push_constant) uniform Params {
@@ -48,20 +50,8 @@ bool inside(ivec2 q) {
     return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(pc.frameSize)));
 }
 
-// A previous pair is a technique when both its pixels look like the current pair's.
-bool prev_pair_usable(ivec2 p, ivec2 q, uint d) {
-    if (!pair_inside(q, d, pc.frameSize)) return false;
-    for (uint b = 0u; b < 2u; ++b)
-        if (!pair_pixels_alike(primary_in[pixel_index(pair_pixel(p, d, b))], false,
-                               primary_prev[pixel_index(pair_pixel(q, d, b))], true,
-                               pc.normalThreshold, pc.depthThreshold, pc.albedoThreshold))
-            return false;
-    return true;
-}
-
-float camera_distance(PrimaryHit h) {
-    if (!primary_valid(h)) return 1e30;
-    return length(surface_point(h.hit.x, uintBitsToFloat(h.hit.yz)).p - h.camera.xyz);
+bool alike(PixelFeatures a, PixelFeatures b) {
+    return features_alike(a, b, pc.normalThreshold, pc.depthThreshold, pc.albedoThreshold);
 }
 
 // Per slot: evaluations 4 slot + 0/1 = the previous winner at p_b / p_{1-b}, 4 slot + 2/3 = the
@@ -92,6 +82,39 @@ void main() {
     PairReservoir hist[4];  // the previous winner (W over the footprint), film offset translated
     float hist_M[4], M_prev[4], partner_M[4];
     bool partner_ok[4];
+    // The current pixels' features: p, p + e_x, p + e_y.
+    PixelFeatures here[3];
+    here[0] = features_in[idx];
+    for (uint d = 0u; d < 2u; ++d)
+        if (pair_inside(p, d, pc.frameSize))
+            here[1u + d] = features_in[pixel_index(pair_pixel(p, d, 1u))];
+    // Per direction: the motion and the usable previous pairs (the same for both signs).
+    vec2 motion[2];
+    ivec2 block[2];
+    uint usable[2];  // bit i: previous pair block + (i & 1, i >> 1) is a technique
+    bool area = cfg.area != 0u;
+    for (uint d = 0u; d < 2u; ++d) {
+        usable[d] = 0u;
+        block[d] = ivec2(0);
+        motion[d] = vec2(0.0);
+        if (!pair_inside(p, d, pc.frameSize)) continue;
+        // The pair's motion: that of its nearer pixel.
+        PixelFeatures f0 = here[0], f1 = here[1u + d];
+        bool first_nearer = f0.valid != 0u && (f1.valid == 0u || f0.depth <= f1.depth);
+        motion[d] = imageLoad(motionImage, first_nearer ? p : pair_pixel(p, d, 1u)).xy;
+        // Area ReSTIR: the footprint's 2x2 previous pairs. ReSTIR PT (samples start at the
+        // pixel's primary hit): the one previous pair at the rounded motion vector.
+        block[d] = ivec2(floor(area ? vec2(p) + motion[d] : vec2(p) + 0.5 + motion[d]));
+        for (uint i = 0u; i < (area ? 4u : 1u); ++i) {
+            ivec2 q = block[d] + ivec2(i & 1u, i >> 1);
+            // A previous pair is a technique when both its pixels look like the current pair's.
+            if (!pair_inside(q, d, pc.frameSize) ||
+                !alike(f0, features_prev[pixel_index(q)]) ||
+                !alike(f1, features_prev[pixel_index(pair_pixel(q, d, 1u))]))
+                continue;
+            usable[d] |= 1u << i;
+        }
+    }
     for (uint slot = 0u; slot < 4u; ++slot) {
         uint d = slot >> 1, sign = slot & 1u;
         hist[slot] = pair_empty();
@@ -102,16 +125,9 @@ void main() {
         if (sign >= pair_signs(ps) || !pair_inside(p, d, pc.frameSize)) continue;
         PairReservoir rc = cur.slot[slot];
         float cap = pc.confidenceCap * rc.M;
-        // The pair's motion: that of its nearer pixel.
-        ivec2 p1 = pair_pixel(p, d, 1u);
-        bool first_nearer = camera_distance(primary_in[idx]) <= camera_distance(primary_in[pixel_index(p1)]);
-        vec2 t = imageLoad(motionImage, first_nearer ? p : p1).xy;
-        // Area ReSTIR: the footprint's 2x2 previous pairs. ReSTIR PT (samples start at the
-        // pixel's primary hit): the one previous pair at the rounded motion vector.
-        bool area = cfg.area != 0u;
-        vec2 base = area ? vec2(p) + t : floor(vec2(p) + 0.5 + t);
-        ivec2 q0 = ivec2(floor(base));
-        vec2 f = base - vec2(q0);
+        vec2 t = motion[d];
+        ivec2 q0 = block[d];
+        vec2 f = area ? vec2(p) + t - vec2(q0) : vec2(0.0);
         // The current sample's partner: the previous pair its film position maps to (the same
         // for either bit: both pixels of a pair move by t).
         vec2 Xc = area ? vec2(p) + rc.s.film_lens.xy + t : vec2(q0) + rc.s.film_lens.xy;
@@ -119,7 +135,7 @@ void main() {
         PairStream frac = pair_stream_begin();
         for (uint i = 0u; i < (area ? 4u : 1u); ++i) {
             ivec2 q = q0 + ivec2(i & 1u, i >> 1);
-            if (!prev_pair_usable(p, q, d)) continue;
+            if ((usable[d] & (1u << i)) == 0u) continue;
             PairReservoir rq = pairs_prev[pixel_index(q)].slot[slot];
             float Mq = min(rq.M, cap);
             vec2 cover = mix(1.0 - f, f, vec2(i & 1u, i >> 1));
