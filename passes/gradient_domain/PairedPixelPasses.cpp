@@ -144,6 +144,11 @@ public:
                 "outer shift of the base path to the new pair: film and lens sample copied "
                 "(Jacobian 1), or primary-hit reconnection under a thin lens (Area ReSTIR "
                 "Sec. 6, lens-space Jacobian; fails without a lens)");
+        r.paramEnum("mis", "defensivePairwise", {"defensivePairwise", "balance"})
+            .doc(
+                "resampling MIS of the current and the neighbour pair: defensive pairwise (the "
+                "current sample keeps at least half its weight; ReSTIRPTSpatial's default) or "
+                "the generalized balance heuristic");
         r.paramEnum("ablation", "none", {"none", "dropOuterJacobian", "reuseAcrossSigns"})
             .doc(
                 "biased variants the tests must detect: the outer shift's Jacobian left out "

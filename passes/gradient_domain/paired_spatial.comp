@@ -3,8 +3,9 @@
 // takes one neighbour pair (q, q+e). The outer shift moves a sample (s, b) of pair q to the
 // matching pixel p_b of the new pair (Area ReSTIR's film and lens copy, Jacobian 1; or, under a
 // thin lens, primary-hit reconnection with its lens-space Jacobian, Eq. 21-22), the inner shift
-// evaluates it at p_{1-b}. The two techniques are combined by the generalized balance heuristic
-// with confidences, each target pulled back through the outer Jacobian.
+// evaluates it at p_{1-b}. The two techniques are combined by defensive pairwise MIS or the
+// generalized balance heuristic, with confidences, each target pulled back through the outer
+// Jacobian.
 // Adaptive reuse (Sec. 5.3): a random neighbour pair rarely resembles an edge pair (one whose two
 // pixels differ in normal, depth or albedo), whose gradient is the one that matters; for edge
 // pairs up to edgeCandidates random pairs in the radius are checked for one whose pixels both
@@ -26,7 +27,8 @@ layout(std430) readonly buffer PrimaryIn { PrimaryHit primary_in[]; };
 layout(std430) readonly buffer FeaturesIn { PixelFeatures features_in[]; };
 
 // Enums arrive as generated defines: OUTER_SHIFT_COPY / OUTER_SHIFT_PRIMARY_RECONNECT,
-// ABLATION_NONE / ABLATION_DROP_OUTER_JACOBIAN / ABLATION_REUSE_ACROSS_SIGNS.
+// MIS_DEFENSIVE_PAIRWISE / MIS_BALANCE, ABLATION_NONE / ABLATION_DROP_OUTER_JACOBIAN /
+// ABLATION_REUSE_ACROSS_SIGNS.
 layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint frameIndex;
@@ -39,6 +41,7 @@ layout(push_constant) uniform Params {
     float depthThreshold;
     float albedoThreshold;
     uint outerShift;
+    uint mis;
     uint ablation;
 } pc;
 
@@ -158,6 +161,10 @@ void main() {
     // solid_src / solid_dst; targets in another domain are pulled back through it (Lin et al.
     // Eq. 9). The ablation leaves it out.
     bool drop_J = pc.ablation == ABLATION_DROP_OUTER_JACOBIAN;
+    // Defensive pairwise MIS (Bitterli 2022; ReSTIRPTSpatial's default) with one neighbour: the
+    // neighbour's balance weight halved, the current sample keeps (1 + its balance weight) / 2.
+    bool defensive = pc.mis == MIS_DEFENSIVE_PAIRWISE;
+    float mis_share = defensive ? 0.5 : 1.0;
     PairSlots out_slots = cur;
     for (uint slot = 0u; slot < 4u; ++slot) {
         uint d = slot >> 1, sign = slot & 1u;
@@ -169,7 +176,7 @@ void main() {
             vec3 g = pair_integrand(F[e], F[e + 1u], rq.b, solid[e]);
             float t_here = pair_target(g, sign, positivization);
             float J = drop_J ? 1.0 : J_here[slot] * rq.solid / solid[e];
-            float m = mis_balance2(rq.M, rq.target / J, rc.M, t_here);
+            float m = mis_balance2(rq.M, rq.target / J, rc.M, t_here) * mis_share;
             pair_stream_add(st, rq.s, g, t_here, m * t_here * rq.W * J, rng_next(rng), rq.b, solid[e]);
         }
         float t_there = 0.0;
@@ -180,6 +187,7 @@ void main() {
                                   positivization) * J;
         }
         float m_c = mis_balance2(rc.M, rc.target, rq.M, t_there);
+        if (defensive) m_c = 0.5 * (1.0 + m_c);
         pair_stream_add(st, rc.s, rc.g, rc.target, m_c * rc.target * rc.W, rng_next(rng), rc.b,
                         rc.solid);
         out_slots.slot[slot] = pair_stream_end(st, rc.M + rq.M);

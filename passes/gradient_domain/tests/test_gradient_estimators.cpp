@@ -277,12 +277,14 @@ TEST(GradientAfterReSTIR, GradientsAndPrimalUnbiased) {
 }
 
 // ReSTIR G-PT (graphs/grestir_pt.json): paired-pixel reservoirs with temporal and spatial reuse,
-// with and without positivization, static and moving camera.
+// with and without positivization, both spatial MIS weights, static and moving camera.
 TEST(ReSTIRGPT, GradientsAndPrimalUnbiased) {
     scene::Scene box = scene::loadScene(sourcePath("scenes/cornell_box.json"));
     EXPECT_TRUE(compareGReSTIR(box, json::object(), 24, 0.0f).unbiased()) << "static camera";
     EXPECT_TRUE(compareGReSTIR(box, {{"pairs.positivization", false}}, 24, 0.0f).unbiased())
         << "without positivization";
+    EXPECT_TRUE(compareGReSTIR(box, {{"pairSpatial.mis", "balance"}}, 24, 0.0f).unbiased())
+        << "balance heuristic in spatial reuse";
     EXPECT_TRUE(compareGReSTIR(box, json::object(), 48, 3.0f).unbiased()) << "moving camera";
 }
 
