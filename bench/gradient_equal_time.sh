@@ -11,7 +11,8 @@
 #
 #   bash bench/gradient_equal_time.sh                        # 64x64, 4 repeats
 #   WIDTH=32 HEIGHT=32 REPEATS=2 bash bench/gradient_equal_time.sh   # quicker
-# OUT (default out/gradient_equal_time) takes the tables' CSVs and images.
+# OUT (default out/gradient_equal_time) takes the tables' CSVs and images; SCENES replaces the
+# project scenes, STAIRS=none skips the staircase.
 source "$(dirname "$0")/lib.sh"
 uptime
 OUT="${OUT:-out/gradient_equal_time}"
@@ -20,7 +21,7 @@ run() {  # scene, degrees, configs, out name
         move_degrees="$2" move_frames="${MOVE_FRAMES:-8}" width="${WIDTH:-64}" height="${HEIGHT:-64}" \
         budget_ms=1 steps=1 repeats="${REPEATS:-4}" ref_frames="${REF_FRAMES:-32}" ref_spp=64 out="$OUT/$4"
 }
-scenes="scenes/cornell_box.json scenes/glossy_spheres.json"
+scenes="${SCENES:-scenes/cornell_box.json scenes/glossy_spheres.json}"
 stairs=${STAIRS:-../shared/scenes/staircase2-modern-hall/scene.xml}  # STAIRS=none: skip
 [ -e "$stairs" ] && scenes="$scenes $stairs"
 for scene in $scenes; do

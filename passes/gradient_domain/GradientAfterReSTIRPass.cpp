@@ -4,6 +4,7 @@
 #include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
+#include "passes/gradient_domain/GradientImages.h"
 #include "passes/restir_pt/PathReservoir.h"
 
 namespace loom {
@@ -12,27 +13,13 @@ namespace {
 constexpr uint64_t kGradientPixelBytes = 10 * 16;  // GradientPixel, gradient_pixels.glsl
 }
 
-class GradientAfterReSTIRPass : public Pass {
+class GradientAfterReSTIRPass : public restir::ShiftCountingPass {
 public:
     void reflect(PassReflection& r) const override {
         r.inputBuffer("reservoirs")
             .doc("final path reservoirs of the frame (ReSTIRPTSpatial.reservoirsOut)");
         r.inputBuffer("primary").doc("ReSTIRPTInitial.primary: the pixels' primary hits");
-        r.outputTexture("primal", gpu::Format::RGBA32F)
-            .doc("the reservoirs' estimate F W, without the emission seen at the primary hit");
-        r.outputTexture("dx", gpu::Format::RGBA32F)
-            .doc(
-                "two-sided estimate of I(p + e_x) - I(p), without that emission; 0 in the last "
-                "column");
-        r.outputTexture("dy", gpu::Format::RGBA32F)
-            .doc(
-                "two-sided estimate of I(p + e_y) - I(p), without that emission; 0 in the last "
-                "row");
-        r.outputTexture("direct", gpu::Format::RGBA32F)
-            .doc(
-                "emission seen at the primary hit (environment on a miss), added back after the "
-                "solve");
-        r.outputTexture("color", gpu::Format::RGBA32F).optional().doc("primal + direct");
+        gradient::reflectGradientImages(r, "the reservoirs' estimate F W");
         r.scratchBuffer("pixels")
             .bytesPerPixel(kGradientPixelBytes)
             .doc("per pixel: primal, four one-sided gradients, emission (gradient_pixels.glsl)");
@@ -69,12 +56,9 @@ public:
             .set("samplesPerPixel", 1u)
             .dispatch(ctx, rb, ctx.width(), ctx.height());
     }
-    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
-    std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mShift, mResolve[2];
-    restir::ShiftCounters mCounters;
 };
 
 LOOM_REGISTER_PASS(GradientAfterReSTIRPass, "GradientAfterReSTIR",

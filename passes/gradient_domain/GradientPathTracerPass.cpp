@@ -7,6 +7,7 @@
 #include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
+#include "passes/gradient_domain/GradientImages.h"
 #include "passes/restir_pt/PathReservoir.h"
 
 namespace loom {
@@ -18,21 +19,7 @@ constexpr uint64_t kGradientPixelBytes = 10 * 16;  // GradientPixel, gradient_pi
 class GradientPathTracerPass : public Pass {
 public:
     void reflect(PassReflection& r) const override {
-        r.outputTexture("primal", gpu::Format::RGBA32F)
-            .doc("MIS-weighted primal estimate, without the emission seen at the primary hit");
-        r.outputTexture("dx", gpu::Format::RGBA32F)
-            .doc(
-                "two-sided estimate of I(p + e_x) - I(p), without that emission; 0 in the last "
-                "column");
-        r.outputTexture("dy", gpu::Format::RGBA32F)
-            .doc(
-                "two-sided estimate of I(p + e_y) - I(p), without that emission; 0 in the last "
-                "row");
-        r.outputTexture("direct", gpu::Format::RGBA32F)
-            .doc(
-                "emission seen at the primary hit (environment on a miss), added back after the "
-                "solve");
-        r.outputTexture("color", gpu::Format::RGBA32F).optional().doc("primal + direct");
+        gradient::reflectGradientImages(r, "MIS-weighted primal estimate");
         r.scratchBuffer("pixels")
             .bytesPerPixel(kGradientPixelBytes)
             .doc(

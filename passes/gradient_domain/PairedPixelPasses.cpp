@@ -4,6 +4,7 @@
 #include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
+#include "passes/gradient_domain/GradientImages.h"
 #include "passes/restir_pt/PathReservoir.h"
 
 namespace loom {
@@ -25,7 +26,7 @@ void reflectPixelTests(PassReflection& r) {
 }
 }  // namespace
 
-class PairedPixelInitialPass : public Pass {
+class PairedPixelInitialPass : public restir::ShiftCountingPass {
 public:
     void reflect(PassReflection& r) const override {
         r.inputBuffer("reservoirs")
@@ -60,15 +61,12 @@ public:
             .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
         KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
-    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
-    std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
-    restir::ShiftCounters mCounters;
 };
 
-class PairedPixelTemporalPass : public Pass {
+class PairedPixelTemporalPass : public restir::ShiftCountingPass {
 public:
     void reflect(PassReflection& r) const override {
         r.inputBuffer("pairs").doc("this frame's pair reservoirs (PairedPixelInitial.pairs)");
@@ -110,15 +108,12 @@ public:
             .set("RestirCounters", mCounters.reset(ctx.gpu(), ctx.cmd()));
         KernelParams(*this, *mPipeline, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
-    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
-    std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
-    restir::ShiftCounters mCounters;
 };
 
-class PairedPixelSpatialPass : public Pass {
+class PairedPixelSpatialPass : public restir::ShiftCountingPass {
 public:
     void reflect(PassReflection& r) const override {
         r.inputBuffer("pairs").doc("pair reservoirs to reuse between (after temporal reuse)");
@@ -179,12 +174,9 @@ public:
             in = dst;
         }
     }
-    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
-    std::map<std::string, double> stats() const override { return mCounters.stats(); }
 
 private:
     std::shared_ptr<gpu::ComputePipeline> mPipeline;
-    restir::ShiftCounters mCounters;
 };
 
 class PairedPixelResolvePass : public Pass {
@@ -194,15 +186,7 @@ public:
         r.inputBuffer("reservoirs")
             .doc("final primal reservoirs (Area ReSTIR: ReSTIRPTSpatial.reservoirsOut)");
         r.inputBuffer("primary").doc("ReSTIRPTInitial.primary");
-        r.outputTexture("primal", gpu::Format::RGBA32F)
-            .doc("the primal reservoirs' F W, without the emission seen at the primary hit");
-        r.outputTexture("dx", gpu::Format::RGBA32F)
-            .doc("estimate of I(p + e_x) - I(p) without that emission; 0 in the last column");
-        r.outputTexture("dy", gpu::Format::RGBA32F)
-            .doc("estimate of I(p + e_y) - I(p) without that emission; 0 in the last row");
-        r.outputTexture("direct", gpu::Format::RGBA32F)
-            .doc("emission seen at the primary hit, added back after the solve");
-        r.outputTexture("color", gpu::Format::RGBA32F).optional().doc("primal + direct");
+        gradient::reflectGradientImages(r, "the primal reservoirs' F W");
         r.paramEnum("ablation", "none", {"none", "flipGradientSign"})
             .doc("biased variant the tests must detect: the gradients' sign flipped");
     }

@@ -47,6 +47,16 @@ private:
     gpu::CounterBuffer<6> mCounters{"RestirCounters"};
 };
 
+// A pass whose kernels shift paths, with the shift counters as its stats.
+class ShiftCountingPass : public Pass {
+public:
+    void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
+    std::map<std::string, double> stats() const override { return mCounters.stats(); }
+
+protected:
+    ShiftCounters mCounters;
+};
+
 // Binds the scene and reflectTemporalReuse's ports under the temporal kernels' block names, and
 // the shift counters (zeroed).
 gpu::Bindings temporalReuseBindings(ExecuteContext& ctx, ShiftCounters& counters);
