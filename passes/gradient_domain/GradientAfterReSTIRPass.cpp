@@ -9,10 +9,6 @@
 
 namespace loom {
 
-namespace {
-constexpr uint64_t kGradientPixelBytes = 10 * 16;  // GradientPixel, gradient_pixels.glsl
-}
-
 class GradientAfterReSTIRPass : public restir::ShiftCountingPass {
 public:
     void reflect(PassReflection& r) const override {
@@ -21,17 +17,14 @@ public:
         r.inputBuffer("primary").doc("ReSTIRPTInitial.primary: the pixels' primary hits");
         gradient::reflectGradientImages(r, "the reservoirs' estimate F W");
         r.scratchBuffer("pixels")
-            .bytesPerPixel(kGradientPixelBytes)
+            .bytesPerPixel(gradient::kGradientPixelBytes)
             .doc("per pixel: primal, four one-sided gradients, emission (gradient_pixels.glsl)");
         r.paramEnum("ablation", "none", {"none", "flipGradientSign"})
             .doc("biased variant the tests must detect: the gradient's sign flipped");
     }
     void compile(ShaderLibrary& shaders) override {
         mShift = compileKernel(*this, shaders, "passes/gradient_domain/gradient_after_restir.comp");
-        for (int color = 0; color < 2; ++color)
-            mResolve[color] =
-                compileKernel(*this, shaders, "passes/gradient_domain/gpt_resolve.comp",
-                              {{"HAS_COLOR", color ? "1" : "0"}});
+        mResolve.compile(*this, shaders);
     }
     void execute(ExecuteContext& ctx) override {
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
@@ -44,21 +37,12 @@ public:
             .set("RestirCounters", counters);
         KernelParams(*this, *mShift, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
         ctx.cmd().barrier();
-        bool color = ctx.has("color");
-        gpu::Bindings rb;
-        rb.set("GradientPixels", pixels)
-            .set("primalImage", ctx.texture("primal"))
-            .set("dxImage", ctx.texture("dx"))
-            .set("dyImage", ctx.texture("dy"))
-            .set("directImage", ctx.texture("direct"));
-        if (color) rb.set("colorImage", ctx.texture("color"));
-        KernelParams(*this, *mResolve[color], ctx)
-            .set("samplesPerPixel", 1u)
-            .dispatch(ctx, rb, ctx.width(), ctx.height());
+        mResolve.dispatch(*this, ctx, 1u);
     }
 
 private:
-    std::shared_ptr<gpu::ComputePipeline> mShift, mResolve[2];
+    std::shared_ptr<gpu::ComputePipeline> mShift;
+    gradient::GradientPixelsResolve mResolve;
 };
 
 LOOM_REGISTER_PASS(GradientAfterReSTIRPass, "GradientAfterReSTIR",

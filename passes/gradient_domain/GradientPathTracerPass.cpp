@@ -12,16 +12,12 @@
 
 namespace loom {
 
-namespace {
-constexpr uint64_t kGradientPixelBytes = 10 * 16;  // GradientPixel, gradient_pixels.glsl
-}
-
 class GradientPathTracerPass : public Pass {
 public:
     void reflect(PassReflection& r) const override {
         gradient::reflectGradientImages(r, "MIS-weighted primal estimate");
         r.scratchBuffer("pixels")
-            .bytesPerPixel(kGradientPixelBytes)
+            .bytesPerPixel(gradient::kGradientPixelBytes)
             .doc(
                 "per pixel: weighted primal, four neighbour shares, four one-sided gradients, "
                 "emission");
@@ -50,13 +46,9 @@ public:
     }
     void compile(ShaderLibrary& shaders) override {
         mTrace = compileKernel(*this, shaders, "passes/gradient_domain/gpt.comp");
-        for (int color = 0; color < 2; ++color)
-            mResolve[color] =
-                compileKernel(*this, shaders, "passes/gradient_domain/gpt_resolve.comp",
-                              {{"HAS_COLOR", color ? "1" : "0"}});
+        mResolve.compile(*this, shaders);
     }
     void execute(ExecuteContext& ctx) override {
-        bool color = ctx.has("color");
         auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
         auto pixels = ctx.scratchBuffer("pixels");
@@ -75,14 +67,7 @@ public:
                 .dispatch(ctx, b, ctx.width(), ctx.height());
         }
         ctx.cmd().barrier();
-        gpu::Bindings rb;
-        rb.set("GradientPixels", pixels)
-            .set("primalImage", ctx.texture("primal"))
-            .set("dxImage", ctx.texture("dx"))
-            .set("dyImage", ctx.texture("dy"))
-            .set("directImage", ctx.texture("direct"));
-        if (color) rb.set("colorImage", ctx.texture("color"));
-        KernelParams(*this, *mResolve[color], ctx).dispatch(ctx, rb, ctx.width(), ctx.height());
+        mResolve.dispatch(*this, ctx, spp);
     }
     void frameCompleted(gpu::Context& gpu) override {
         mRayCounter.read(gpu);
@@ -97,7 +82,8 @@ public:
     }
 
 private:
-    std::shared_ptr<gpu::ComputePipeline> mTrace, mResolve[2];
+    std::shared_ptr<gpu::ComputePipeline> mTrace;
+    gradient::GradientPixelsResolve mResolve;
     gpu::CounterBuffer<2> mRayCounter{"RayCounter"};
     restir::ShiftCounters mCounters;
 };

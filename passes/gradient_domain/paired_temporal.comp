@@ -46,10 +46,6 @@ layout(push_constant) uniform Params {
 
 uint pixel_index(ivec2 q) { return uint(q.y) * pc.frameSize.x + uint(q.x); }
 
-bool inside(ivec2 q) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(pc.frameSize)));
-}
-
 bool alike(PixelFeatures a, PixelFeatures b) {
     return features_alike(a, b, pc.normalThreshold, pc.depthThreshold, pc.albedoThreshold);
 }
