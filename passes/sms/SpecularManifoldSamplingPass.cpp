@@ -9,6 +9,7 @@
 #include <glm/glm.hpp>
 
 #include "core/gpu/CounterBuffer.h"
+#include "core/gpu/WorkList.h"
 #include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/Camera.h"
@@ -96,9 +97,7 @@ public:
         auto path = compileKernel(*this, ctx.shaders(), "passes/sms/sms_path.comp", chain);
         auto trials = compileKernel(*this, ctx.shaders(), "passes/sms/sms_trials.comp", chain);
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
-        if (!mDispatchArgs) mDispatchArgs = ctx.gpu().createBuffer(3 * 16, "SmsDispatchArgs");
-        ctx.cmd().fillBuffer(*mDispatchArgs, 1u);  // (1, 1, 1) groups each
-        ctx.cmd().barrier();
+        mWork.reset(ctx.gpu(), ctx.cmd());
         float minSegment = 1e-4f * std::max(scene.boundingSphere().w, 1e-6f);
 
         gpu::Bindings b;
@@ -107,12 +106,11 @@ public:
             .set("SmsPixels", ctx.scratchBuffer("pixels"))
             .set("SmsSolutions", ctx.scratchBuffer("solutions"))
             .set("SmsCounters", counters)
-            .set("SmsActive", ctx.scratchBuffer("active"))
-            .set("SmsDispatchArgs", mDispatchArgs)
             .set("pathImage", ctx.scratchTexture("path"))
             .set("colorImage", ctx.texture("color"));
         if (ctx.has("caustic")) b.set("causticImage", ctx.texture("caustic"));
         if (ctx.has("stats")) b.set("statsImage", ctx.texture("stats"));
+        mWork.bind(b, ctx.scratchBuffer("active"));
         auto params = [&](gpu::ComputePipeline& p) {
             KernelParams k(*this, p, ctx);
             k.set("minSegment", minSegment);
@@ -124,7 +122,7 @@ public:
             ctx.cmd().barrier();
             params(*trials)
                 .set("dispatchIndex", uint32_t(i))
-                .dispatchIndirect(ctx, b, *mDispatchArgs, 16 * (i % 3));
+                .dispatchIndirect(ctx, b, mWork.args(), gpu::WorkList::argsOffset(i));
         }
         ctx.cmd().barrier();
         params(*resolve).dispatch(ctx, b, ctx.width(), ctx.height());
@@ -219,9 +217,10 @@ private:
         mCasterScene = &s;
     }
 
-    std::shared_ptr<gpu::Buffer> mCasters, mDispatchArgs;
+    std::shared_ptr<gpu::Buffer> mCasters;
+    gpu::WorkList mWork;
     const scene::Scene* mCasterScene = nullptr;
-    gpu::CounterBuffer<11> mCounters{"SmsCounters"};  // 8 totals, 3 list lengths
+    gpu::CounterBuffer<8> mCounters{"SmsCounters"};
     double mTotals[8] = {};
     bool mWarnedLoopLimit = false, mWarnedCap = false;
 };

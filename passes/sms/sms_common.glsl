@@ -5,6 +5,7 @@
 #define LOOM_PASSES_SMS_COMMON_GLSL
 
 #include "lib/manifold/sms.glsl"
+#include "lib/work_list.glsl"
 
 layout(push_constant) uniform Params {
     uvec2 frameSize;
@@ -63,28 +64,7 @@ layout(std430) buffer SmsCounters {
     uint sms_capped;       // estimates that reached maxTrials or ran out of dispatches
     uint sms_max_bvh_iterations;
     uint sms_rays;
-    // Lengths of the active-pixel lists (SmsActive): trial dispatch d reads list d % 2 with
-    // length [d % 3] and appends the pixels it leaves unfinished to list (d + 1) % 2, length
-    // [(d + 1) % 3]; it clears [(d + 2) % 3], which the next dispatch appends to.
-    uint sms_active_count[3];
 };
-// Active pixels (estimate still running), packed so that a trial dispatch's invocations all
-// have work: lavapipe runs an 8-wide SIMD group until its last lane finishes, and unbiased
-// estimates are heavy-tailed (a few pixels need many trials). x: list 0, y: list 1.
-layout(std430) buffer SmsActive { uvec2 sms_active[]; };
-// Indirect dispatch arguments of the trial dispatches, three sets indexed like
-// sms_active_count: max(1, ceil(length / SMS_TRIAL_GROUP)) groups, so that a dispatch always
-// has an invocation 0 to clear the sets after the next. The pass fills the buffer with 1s
-// before the frame, i.e. (1, 1, 1) each.
-layout(std430) buffer SmsDispatchArgs { uvec4 sms_dispatch_args[3]; };
-#define SMS_TRIAL_GROUP 64u  // invocations per trial workgroup (8 x 8)
-
-void sms_active_append(uint list, uint counter, uint index) {
-    uint slot = atomicAdd(sms_active_count[counter], 1u);
-    if (list == 0u) sms_active[slot].x = index;
-    else sms_active[slot].y = index;
-    if (slot > 0u && slot % SMS_TRIAL_GROUP == 0u) atomicAdd(sms_dispatch_args[counter].x, 1u);
-}
 
 uint sms_pixel_index(uvec2 p) { return p.y * pc.frameSize.x + p.x; }
 
@@ -99,23 +79,8 @@ ManifoldSettings sms_settings() {
 }
 
 ManifoldLight sms_pixel_light(SmsPixel st) {
-    ManifoldLight ml;
-    ml.y = st.light_y.xyz;
-    ml.pdf = st.light_y.w;
-    ml.n = st.light_n.xyz;
-    ml.light = floatBitsToUint(st.light_n.w);
-    ml.directional = scene_lights[ml.light].type == LIGHT_DIRECTIONAL;
-    ml.point = dot(ml.n, ml.n) == 0.0 && !ml.directional;
-    ml.s = vec3(0.0);
-    ml.t = vec3(0.0);
-    if (!ml.point) {
-        vec3 a, b, c;
-        triangle_positions(scene_lights[ml.light].index, a, b, c);
-        ml.s = normalize(b - a);
-        ml.t = cross(ml.n, ml.s);
-    }
-    ml.valid = true;
-    return ml;
+    return manifold_light_from(st.light_y.xyz, st.light_y.w, st.light_n.xyz,
+                               floatBitsToUint(st.light_n.w));
 }
 
 #endif

@@ -58,7 +58,7 @@ void main() {
                 st.light_y = vec4(ml.y, ml.pdf);
                 st.light_n = vec4(ml.n, uintBitsToFloat(ml.light));
                 atomicAdd(sms_samples, 1u);
-                sms_active_append(0u, 0u, sms_pixel_index(pixel));
+                work_list_append(0u, sms_pixel_index(pixel));
             }
         }
     }

@@ -17,15 +17,10 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 void main() {
-    // Invocation i takes the i-th active pixel (see SmsActive); the dispatch is indirect.
-    uint i = gl_WorkGroupID.x * SMS_TRIAL_GROUP + gl_LocalInvocationIndex;
-    uint d = pc.dispatchIndex, list = d % 2u;
-    if (i == 0u) {
-        sms_active_count[(d + 2u) % 3u] = 0u;
-        sms_dispatch_args[(d + 2u) % 3u] = uvec4(1u);
-    }
-    if (i >= sms_active_count[d % 3u]) return;
-    uint index = list == 0u ? sms_active[i].x : sms_active[i].y;
+    // Invocation i takes the i-th active pixel (lib/work_list.glsl); the dispatch is indirect.
+    uint d = pc.dispatchIndex, index;
+    if (!work_list_item(d, gl_WorkGroupID.x * WORK_LIST_GROUP + gl_LocalInvocationIndex, index))
+        return;
     SmsPixel st = sms_pixels[index];
     uint status = st.hit.w;
     if (status == SMS_NONE || status == SMS_DONE) return;
@@ -39,15 +34,7 @@ void main() {
     ManifoldLight ml = sms_pixel_light(st);
     ManifoldSettings ms = sms_settings();
     Rng rng = rng_from_seed(st.rng);
-    vec3 x0 = sh0.sp.p, ng0 = sh0.sp.ng;
-    // Offsets towards the camera side: the walk leaves x0 on the side it is seen from.
-    if (dot(ng0, st.wo.xyz) < 0.0) ng0 = -ng0;
-    // The plane the chain's fixed end point moves in for the geometric term (walk.glsl).
-    vec3 es = ml.s, et = ml.t;
-    if (ml.point || ml.directional) {
-        es = normalize(sh0.sp.dp_du);
-        et = cross(sh0.sp.ng, es);
-    }
+    ManifoldReceiver rc = manifold_receiver(sh0, st.wo.xyz, ml);
     uint iterations = 0u, trials = 0u, bernoulli = 0u, capped = 0u, rays = 0u, solutions = 0u;
 
     ManifoldTrial tr;
@@ -114,7 +101,7 @@ void main() {
             // The next trial: a fresh seed on the casters, or MNEE's straight line.
             vec3 u = vec3(rng_next2(rng), rng_next(rng));
             bool straight = pc.estimator == ESTIMATOR_MNEE;
-            tr = manifold_trial_start(x0, ng0, ml.y, ml.n, es, et, ml.directional, straight,
+            tr = manifold_trial_start(rc.x0, rc.ng0, ml.y, ml.n, rc.es, rc.et, ml.directional, straight,
                                       straight ? ml.y : manifold_sample_caster(u));
             trials += 1u;
             pending = true;
@@ -125,7 +112,7 @@ void main() {
         manifold_trial_advance(tr, found, hit, ms);
     }
     st.hit.w = status;
-    if (status != SMS_DONE) sms_active_append(1u - list, (d + 1u) % 3u, index);
+    if (status != SMS_DONE) work_list_append(d + 1u, index);
     st.rng = rng.state;
     st.counts.x += iterations;
     st.counts.y += trials;

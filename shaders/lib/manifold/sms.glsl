@@ -12,6 +12,7 @@
 #include "lib/bvh.glsl"
 #include "lib/lights.glsl"
 #include "lib/manifold/coverage.glsl"
+#include "lib/manifold/seed_space.glsl"
 #include "lib/manifold/walk.glsl"
 #include "lib/sampling.glsl"
 #include "lib/shading.glsl"
@@ -54,7 +55,9 @@ struct ManifoldLight {
     bool valid;  // false: no light SMS can connect to (untagged, environment)
 };
 
-ManifoldLight manifold_sample_light(vec3 u) {
+// The light sample of light li at u (pdf per area, or 1 for a point or directional light),
+// invalid for lights SMS cannot connect to.
+ManifoldLight manifold_light_sample_at(uint li, vec2 u) {
     ManifoldLight ml;
     ml.valid = false;
     ml.point = false;
@@ -64,36 +67,89 @@ ManifoldLight manifold_sample_light(vec3 u) {
     ml.n = vec3(0.0);
     ml.s = vec3(0.0);
     ml.t = vec3(0.0);
-    ml.light = 0u;
-    if (light_count() == 0u) return ml;
-    uint li = select_light(u.z);
     ml.light = li;
     LightGpu l = scene_lights[li];
-    if (!manifold_emitter_light(li) || !(l.pmf > 0.0)) return ml;
+    if (!manifold_emitter_light(li)) return ml;
     if (l.type == LIGHT_TRIANGLE) {
         vec3 a, b, c;
         triangle_positions(l.index, a, b, c);
-        ml.y = sample_triangle_point(u.xy, a, b, c);
+        ml.y = sample_triangle_point(u, a, b, c);
         vec3 cr = cross(b - a, c - a);
         float area = 0.5 * length(cr);
         if (!(area > 0.0)) return ml;
         ml.n = normalize(cr);
         ml.s = normalize(b - a);
         ml.t = cross(ml.n, ml.s);
-        ml.pdf = l.pmf / area;
+        ml.pdf = 1.0 / area;
         ml.valid = true;
     } else if (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) {
         ml.y = l.p0.xyz;
-        ml.pdf = l.pmf;
+        ml.pdf = 1.0;
         ml.point = true;
         ml.valid = true;
     } else if (l.type == LIGHT_DIRECTIONAL) {
         ml.y = normalize(l.p0.xyz);
-        ml.pdf = l.pmf;
+        ml.pdf = 1.0;
         ml.directional = true;
         ml.valid = true;
     }
     return ml;
+}
+
+// A light by the scene's selection pmf, then a point on it.
+ManifoldLight manifold_sample_light(vec3 u) {
+    ManifoldLight ml = manifold_light_sample_at(0u, u.xy);
+    ml.valid = false;
+    if (light_count() == 0u) return ml;
+    uint li = select_light(u.z);
+    float pmf = scene_lights[li].pmf;
+    if (!(pmf > 0.0)) return ml;
+    ml = manifold_light_sample_at(li, u.xy);
+    ml.pdf *= pmf;
+    return ml;
+}
+
+// A light sample from what an estimator stored of it: the point, its pdf, the area light's
+// normal (0 for point and directional lights) and the light index.
+ManifoldLight manifold_light_from(vec3 y, float pdf, vec3 n, uint light) {
+    ManifoldLight ml;
+    ml.y = y;
+    ml.pdf = pdf;
+    ml.n = n;
+    ml.light = light;
+    ml.directional = scene_lights[light].type == LIGHT_DIRECTIONAL;
+    ml.point = dot(n, n) == 0.0 && !ml.directional;
+    ml.s = vec3(0.0);
+    ml.t = vec3(0.0);
+    if (!ml.point && !ml.directional) {
+        vec3 a, b, c;
+        triangle_positions(scene_lights[light].index, a, b, c);
+        ml.s = normalize(b - a);
+        ml.t = cross(n, ml.s);
+    }
+    ml.valid = true;
+    return ml;
+}
+
+// The receiver end of a chain: x0 with its geometric normal on the side it is seen from (the
+// walk leaves x0 there), and the plane the chain's fixed end point moves in for the
+// generalized geometric term (walk.glsl): the area light's, or x0's for point and directional
+// lights.
+struct ManifoldReceiver {
+    vec3 x0, ng0, es, et;
+};
+
+ManifoldReceiver manifold_receiver(ShadingPoint sh0, vec3 wo_world, ManifoldLight ml) {
+    ManifoldReceiver r;
+    r.x0 = sh0.sp.p;
+    r.ng0 = dot(sh0.sp.ng, wo_world) < 0.0 ? -sh0.sp.ng : sh0.sp.ng;
+    r.es = ml.s;
+    r.et = ml.t;
+    if (ml.point || ml.directional) {
+        r.es = normalize(sh0.sp.dp_du);
+        r.et = cross(sh0.sp.ng, r.es);
+    }
+    return r;
 }
 
 const uint TRIAL_SEED = 0u;       // tracing the seed chain
@@ -116,9 +172,27 @@ struct ManifoldTrial {
     vec2 step;               // the current Newton step of the first vertex
     float endpoint_det;      // end-point Jacobian determinant of the chain (walk.glsl)
     vec3 es, et;             // the plane the end point moves in: the area light's, or x0's
+#ifdef MANIFOLD_TRUST_REGION
+    // Sample-space partitioning (Hong et al. 2025 Sec. 4.1): the chain's first vertex is on
+    // first_shape, and its seed-space coordinates stay in the tiles around region.
+    ManifoldSeedSpace space;
+    uvec2 region;
+    uint tiles;
+    uint first_shape;
+#endif
 };
 
 bool manifold_trial_running(ManifoldTrial tr) { return tr.phase < TRIAL_CONVERGED; }
+
+#ifdef MANIFOLD_TRUST_REGION
+// Whether the accepted chain's first vertex is still inside the trust region; a walk that
+// leaves it aborts (Hong et al. 2025 Sec. 4.1), for the initial sample and every trial alike.
+bool manifold_trial_in_region(ManifoldTrial tr) {
+    vec2 u;
+    if (!manifold_seed_coords(tr.space, normalize(tr.chain.v[0].p - tr.x0), u)) return false;
+    return manifold_region_contains(tr.region, manifold_seed_tile(u, tr.tiles), tr.tiles);
+}
+#endif
 
 // Rays of a walk start exactly at their vertex and skip its own surface by tmin: an origin
 // offset along the normal would shift every re-traced vertex by up to the offset, more than the
@@ -252,6 +326,10 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
             else evaluate = manifold_trial_begin_walk(tr);
         } else if (i >= ms.max_chain) {
             tr.phase = TRIAL_FAILED;
+#ifdef MANIFOLD_TRUST_REGION
+        } else if (i == 0u && scene_triangles[hit.prim].w != tr.first_shape) {
+            tr.phase = TRIAL_FAILED;  // the seed's ray reached another caster first
+#endif
         } else {
             append = true;
         }
@@ -268,6 +346,12 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
             for (uint j = 0u; j < tr.chain.k; ++j) tr.chain.v[j] = tr.proposal.v[j];
             tr.beta = min(1.0, 2.0 * tr.beta);
             evaluate = true;
+#ifdef MANIFOLD_TRUST_REGION
+            if (!manifold_trial_in_region(tr)) {
+                tr.phase = TRIAL_FAILED;
+                evaluate = false;
+            }
+#endif
         } else if (seeding && tr.straight) {
             ManifoldVertex v = tr.proposal.v[i];
             manifold_trial_ray_from(tr, v.p, v.ng, tr.ray_d);
