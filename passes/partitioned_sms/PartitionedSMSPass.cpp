@@ -1,0 +1,180 @@
+// PartitionedSMS: unbiased caustics by sample-space-partitioned specular manifold sampling
+// with a per-frame prior (Hong et al. 2025 Sec. 4), 1 sample per pixel, at the primary
+// receivers of a path tracer that leaves out the paths it produces. See README.md.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "core/gpu/CounterBuffer.h"
+#include "core/gpu/WorkList.h"
+#include "core/graph/KernelParams.h"
+#include "core/graph/RenderGraph.h"
+#include "core/scene/SceneGpu.h"
+#include "core/util/Log.h"
+#include "passes/partitioned_sms/ManifoldPairs.h"
+
+namespace loom {
+
+namespace {
+
+constexpr uint64_t kPixelBytes = 144;  // PsmsPixel (psms_common.glsl)
+
+enum Counter { kSamples, kSolved, kIterations, kWalks, kBernoulli, kCapped, kMaxSteps, kRays };
+
+}  // namespace
+
+class PartitionedSMSPass : public Pass {
+public:
+    void reflect(PassReflection& r) const override {
+        r.inputBuffer("prior").optional().doc("ManifoldPrior.prior (needed when prior is on)");
+        r.outputTexture("color", gpu::Format::RGBA32F)
+            .doc("full image: path tracer without the SMS-covered paths + caustic");
+        r.outputTexture("caustic", gpu::Format::RGBA32F)
+            .optional()
+            .doc("the caustic estimate alone (primary receivers)");
+        r.outputTexture("stats", gpu::Format::RGBA32F)
+            .optional()
+            .doc("per pixel: Newton iterations, solution found, walks, estimate taken");
+        r.scratchTexture("path").doc("the path tracer's part");
+        r.scratchBuffer("pixels").bytesPerPixel(kPixelBytes).doc("estimator state per pixel");
+        r.scratchBuffer("active").bytesPerPixel(8).doc(
+            "two lists of the pixels whose estimate still runs (lib/work_list.glsl)");
+        r.param("tiles", 16)
+            .range(1, 32)
+            .doc("N: the seed space is cut into N x N tiles, a divisor of 32 (1: plain SMS)");
+        r.param("prior", true)
+            .doc("sample pairs and seeds from ManifoldPrior's tile sets (off: partitioning alone)");
+        r.param("alpha", 0.8)
+            .range(0.0, 0.99)
+            .doc("weight of the prior in the pair choice and the seed mixture (Eq. 7)");
+        r.paramEnum("constraint", "angle_difference", shaderEnum("MANIFOLD_CONSTRAINT"))
+            .doc("specular constraint of the walk (Zeltner et al. Sec. 5.1)");
+        r.param("maxIterations", 20).range(1, 1000).doc("Newton steps per walk (halvings count)");
+        r.param("solverThreshold", 1e-5).min(0).doc("convergence: every |C_i| below this");
+        r.param("uniquenessThreshold", 1e-5)
+            .min(0)
+            .doc("two solutions are one when their first directions d satisfy |d.d' - 1| < this");
+        r.param("maxTrials", 128).min(1).doc("Bernoulli trials before the cap (paper: 128)");
+        r.paramEnum("trialCap", "keep", {"drop", "keep"})
+            .doc("at the cap: keep the sample with K = maxTrials (paper) or drop it (SMS code)");
+        r.param("maxChain", 2)
+            .range(1, 4)
+            .doc("specular vertices of a chain (1: single scattering; 2: sphere, slab)");
+        r.param("geometricTermClamp", 0.0)
+            .min(0)
+            .doc("clamp of the generalized geometric term (0 = off; biased)");
+        r.param("maxBounces", 9).range(0, 64).doc("path tracer: scattering events per path");
+        r.param("rrDepth", 5)
+            .range(1, 64)
+            .doc("path tracer: Russian roulette after this many bounces");
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
+            .doc("path tracer: NEE/BSDF MIS");
+        r.param("excludeCovered", true)
+            .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
+        r.param("trialDispatches", 16)
+            .range(1, 100000)
+            .doc("dispatches per frame the walks may span; unfinished estimates count as capped");
+        r.param("stepBudget", 32768)
+            .range(1024, 60000)
+            .doc("BVH steps per invocation and dispatch (lavapipe ends loops at 65535)");
+    }
+    void execute(ExecuteContext& ctx) override {
+        const auto& scene = ctx.scene();
+        int tiles = param<int>("tiles");
+        if (32 % tiles != 0)
+            throw UserError(
+                fmt::format("pass '{}': tiles = {} does not divide 32 (1, 2, 4, 8, "
+                            "16 or 32)",
+                            name(), tiles));
+        bool prior = param<bool>("prior");
+        if (prior && !ctx.has("prior"))
+            throw UserError(fmt::format(
+                "pass '{}': prior is on but no ManifoldPrior is connected to its 'prior' input "
+                "(connect one, or set prior = false)",
+                name()));
+        mPairs.build(ctx, name());
+        ShaderDefines defines{{"HAS_STATS", ctx.has("stats") ? "1" : "0"},
+                              {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"}};
+        ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))}};
+        auto kernel = [&](const char* file, const ShaderDefines& d) {
+            return compileKernel(*this, ctx.shaders(),
+                                 std::string("passes/partitioned_sms/") + file, d);
+        };
+        auto path = kernel("psms_path.comp", chain);
+        auto trials = kernel("psms_trials.comp", chain);
+        auto resolve = kernel("psms_resolve.comp", defines);
+        auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
+        mWork.reset(ctx.gpu(), ctx.cmd());
+        if (!mNoPrior) mNoPrior = ctx.gpu().createBuffer(16, "ManifoldPrior (none)");
+        float minSegment = 1e-4f * std::max(scene.boundingSphere().w, 1e-6f);
+
+        gpu::Bindings b;
+        scene.bind(b);
+        mPairs.bind(b);
+        b.set("ManifoldPrior", ctx.has("prior") ? ctx.buffer("prior") : mNoPrior)
+            .set("PsmsPixels", ctx.scratchBuffer("pixels"))
+            .set("PsmsCounters", counters)
+            .set("pathImage", ctx.scratchTexture("path"))
+            .set("colorImage", ctx.texture("color"));
+        if (ctx.has("caustic")) b.set("causticImage", ctx.texture("caustic"));
+        if (ctx.has("stats")) b.set("statsImage", ctx.texture("stats"));
+        mWork.bind(b, ctx.scratchBuffer("active"));
+        auto params = [&](gpu::ComputePipeline& p) {
+            KernelParams k(*this, p, ctx);
+            k.set("minSegment", minSegment);
+            k.set("dispatchIndex", 0u);
+            k.set("prior", uint32_t(prior && ctx.has("prior")));
+            return k;
+        };
+        params(*path).dispatch(ctx, b, ctx.width(), ctx.height());
+        for (int i = 0; i < param<int>("trialDispatches"); ++i) {
+            ctx.cmd().barrier();
+            params(*trials)
+                .set("dispatchIndex", uint32_t(i))
+                .dispatchIndirect(ctx, b, mWork.args(), gpu::WorkList::argsOffset(i));
+        }
+        ctx.cmd().barrier();
+        params(*resolve).dispatch(ctx, b, ctx.width(), ctx.height());
+    }
+    void frameCompleted(gpu::Context& gpu) override {
+        mCounters.read(gpu);
+        for (int i = 0; i < 8; ++i) mTotals[i] += mCounters[i];
+        if (mCounters[kMaxSteps] >= 65535u - 16u && !mWarnedLoopLimit) {
+            logWarning(
+                "PartitionedSMS: an invocation ran {} BVH steps in one dispatch, at lavapipe's "
+                "loop limit (65535): lower stepBudget",
+                mCounters[kMaxSteps]);
+            mWarnedLoopLimit = true;
+        }
+    }
+    void onParamChanged(const std::string&) override { std::fill(mTotals, mTotals + 8, 0.0); }
+    // Hong et al. 2025 Table 1 columns over the frames rendered so far.
+    std::map<std::string, double> stats() const override {
+        auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+        const double* t = mTotals;
+        return {{"samples", t[kSamples]},
+                {"solutions", t[kSolved]},
+                {"successRate", ratio(t[kSolved], t[kSamples])},
+                {"iterationsPerSample", ratio(t[kIterations], t[kSamples])},
+                {"trialsPerSolution", ratio(t[kBernoulli], t[kSolved])},
+                {"iterationsPerSolution", ratio(t[kIterations], t[kSolved])},
+                {"walks", t[kWalks]},
+                {"capped", t[kCapped]},
+                {"rays", t[kRays]},
+                {"maxTraversalSteps", double(mCounters[kMaxSteps])}};
+    }
+
+private:
+    ManifoldPairs mPairs;
+    std::shared_ptr<gpu::Buffer> mNoPrior;
+    gpu::WorkList mWork;
+    gpu::CounterBuffer<8> mCounters{"PsmsCounters"};
+    double mTotals[8] = {};
+    bool mWarnedLoopLimit = false;
+};
+
+LOOM_REGISTER_PASS(PartitionedSMSPass, "PartitionedSMS",
+                   "Unbiased caustics by sample-space-partitioned SMS with a per-frame prior "
+                   "(Hong et al. 2025), with a path tracer that leaves out the paths it produces");
+
+}  // namespace loom
