@@ -173,8 +173,9 @@ struct ManifoldTrial {
     float endpoint_det;      // end-point Jacobian determinant of the chain (walk.glsl)
     vec3 es, et;             // the plane the end point moves in: the area light's, or x0's
 #ifdef MANIFOLD_TRUST_REGION
-    // Sample-space partitioning (Hong et al. 2025 Sec. 4.1): the chain's first vertex is on
-    // first_shape, and its seed-space coordinates stay in the tiles around region.
+    // Sample-space partitioning (Hong et al. 2025 Sec. 4.1): the chain's first caster vertex
+    // is on first_shape, and its first vertex's seed-space coordinates stay in the tiles
+    // around region.
     ManifoldSeedSpace space;
     uvec2 region;
     uint tiles;
@@ -294,8 +295,15 @@ bool manifold_trial_scatter_on(inout ManifoldTrial tr, ManifoldChain c, uint i) 
 // only bouncers: coverage.glsl's chains have a caster).
 bool manifold_trial_begin_walk(inout ManifoldTrial tr) {
     bool caster = false;
-    for (uint j = 0u; j < tr.proposal.k; ++j)
-        caster = caster || (scene_shapes[tr.proposal.v[j].shape].flags & SHAPE_CAUSTIC_CASTER) != 0u;
+    for (uint j = 0u; j < tr.proposal.k; ++j) {
+        bool here = (scene_shapes[tr.proposal.v[j].shape].flags & SHAPE_CAUSTIC_CASTER) != 0u;
+#ifdef MANIFOLD_TRUST_REGION
+        // A chain belongs to the pair of its first caster vertex: seeds aimed at another
+        // caster that reach this chain must not count it twice.
+        if (here && !caster && tr.proposal.v[j].shape != tr.first_shape) break;
+#endif
+        caster = caster || here;
+    }
     if (!caster) {
         tr.phase = TRIAL_FAILED;
         return false;
@@ -326,10 +334,6 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
             else evaluate = manifold_trial_begin_walk(tr);
         } else if (i >= ms.max_chain) {
             tr.phase = TRIAL_FAILED;
-#ifdef MANIFOLD_TRUST_REGION
-        } else if (i == 0u && scene_triangles[hit.prim].w != tr.first_shape) {
-            tr.phase = TRIAL_FAILED;  // the seed's ray reached another caster first
-#endif
         } else {
             append = true;
         }
