@@ -12,12 +12,13 @@
 #include "core/scene/SceneGpu.h"
 #include "core/util/Log.h"
 #include "passes/partitioned_sms/ManifoldPairs.h"
+#include "passes/partitioned_sms/ManifoldReuse.h"
 
 namespace loom {
 
 namespace {
 
-constexpr uint64_t kPixelBytes = 144;  // PsmsPixel (psms_common.glsl)
+constexpr uint64_t kPixelBytes = 192;  // PsmsPixel (psms_common.glsl)
 
 enum Counter { kSamples, kSolved, kIterations, kWalks, kBernoulli, kCapped, kMaxSteps, kRays };
 
@@ -35,7 +36,14 @@ public:
         r.outputTexture("stats", gpu::Format::RGBA32F)
             .optional()
             .doc("per pixel: Newton iterations, solution found, walks, estimate taken");
-        r.scratchTexture("path").doc("the path tracer's part");
+        r.outputTexture("path", gpu::Format::RGBA32F)
+            .optional()
+            .doc("the path tracer's part alone (to add reused caustics to)");
+        r.outputBuffer("reservoirs")
+            .optional()
+            .bytesPerPixel(kManifoldReservoirBytes, kManifoldReservoirHeaderBytes)
+            .doc("the caustic samples as reservoirs, for ManifoldReSTIRTemporal/Spatial");
+        r.scratchTexture("pathPart").doc("the path tracer's part (when path is not connected)");
         r.scratchBuffer("pixels").bytesPerPixel(kPixelBytes).doc("estimator state per pixel");
         r.scratchBuffer("active").bytesPerPixel(8).doc(
             "two lists of the pixels whose estimate still runs (lib/work_list.glsl)");
@@ -94,7 +102,8 @@ public:
                 name()));
         mPairs.build(ctx, name());
         ShaderDefines defines{{"HAS_STATS", ctx.has("stats") ? "1" : "0"},
-                              {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"}};
+                              {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"},
+                              {"HAS_RESERVOIRS", ctx.has("reservoirs") ? "1" : "0"}};
         ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))}};
         auto kernel = [&](const char* file, const ShaderDefines& d) {
             return compileKernel(*this, ctx.shaders(),
@@ -114,10 +123,12 @@ public:
         b.set("ManifoldPrior", ctx.has("prior") ? ctx.buffer("prior") : mNoPrior)
             .set("PsmsPixels", ctx.scratchBuffer("pixels"))
             .set("PsmsCounters", counters)
-            .set("pathImage", ctx.scratchTexture("path"))
+            .set("pathImage",
+                 ctx.has("path") ? ctx.texture("path") : ctx.scratchTexture("pathPart"))
             .set("colorImage", ctx.texture("color"));
         if (ctx.has("caustic")) b.set("causticImage", ctx.texture("caustic"));
         if (ctx.has("stats")) b.set("statsImage", ctx.texture("stats"));
+        if (ctx.has("reservoirs")) b.set("ReservoirsOut", ctx.buffer("reservoirs"));
         mWork.bind(b, ctx.scratchBuffer("active"));
         auto params = [&](gpu::ComputePipeline& p) {
             KernelParams k(*this, p, ctx);

@@ -7,6 +7,7 @@
 
 #define MANIFOLD_TRUST_REGION 1
 #include "lib/manifold/pairs.glsl"
+#include "lib/manifold/reservoir.glsl"
 #include "lib/manifold/partition.glsl"
 #include "lib/manifold/prior.glsl"
 #include "lib/manifold/seed_space.glsl"
@@ -54,6 +55,9 @@ struct PsmsPixel {
     uvec4 counts;  // x Newton iterations, y walks, z solution found, w trial cap reached
     uvec4 pair;    // x pair, y its slot in the block's list (~0u: none), z #I, w the tile of
                    // u*, x | y << 8, | #(I n C(u*)) << 16
+    vec4 x1;       // xyz the solution's first vertex, w the estimate's weight K / P(C) (DONE)
+    uvec4 shapes;  // the solution's shape sequence (MANIFOLD_NO_SHAPE after the last)
+    vec4 camera;   // xyz the camera ray's origin (x0 is seen from there), w unused
 };
 layout(std430) buffer PsmsPixels { PsmsPixel psms_pixels[]; };
 

@@ -46,9 +46,14 @@ void main() {
     st.value = vec4(0.0);
     st.counts = uvec4(0u);
     st.pair = uvec4(0u, ~0u, 0u, 0u);
+    st.x1 = vec4(0.0);
+    st.shapes = uvec4(MANIFOLD_NO_SHAPE);
+    st.camera = vec4(o, 1.0);
     if (pr.found) {
         ShadingPoint sh = shading_point(pr.first);
         if (manifold_receiver(sh.shape_flags, sh.mat)) {
+            // The receiver, kept for reuse even when no light point comes of it.
+            st.hit = uvec4(pr.first.prim, floatBitsToUint(pr.first.bary), PSMS_NONE);
             Rng srng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x5A17C0DEu);
             uint block = prior_block(pixel, pc.frameSize);
             uint listed = pc.prior != 0u ? prior_list_length(block) : 0u;

@@ -53,6 +53,7 @@ void main() {
                         !manifold_seed_coords(space, dir, u_star)) {
                         status = PSMS_DONE;
                         st.value.rgb = vec3(0.0);
+                        st.x1.w = 0.0;
                     } else {
                         // C(u*) = R(u*): its tiles in I, and P(C) (Eq. 8).
                         uvec2 centre = manifold_seed_tile(u_star, pc.tiles);
@@ -61,6 +62,9 @@ void main() {
                         st.wo.w = partition_region_probability(part, in_region);
                         st.value.rgb = value;
                         st.target = vec4(dir, 1.0);
+                        st.x1 = vec4(tr.chain.v[0].p, 0.0);
+                        for (uint j = 0u; j < 4u; ++j)
+                            st.shapes[j] = j < tr.chain.k ? tr.chain.v[j].shape : MANIFOLD_NO_SHAPE;
                         st.counts.z = 1u;
                         solutions += 1u;
                         status = PSMS_BERNOULLI;
@@ -68,14 +72,14 @@ void main() {
                 } else {  // PSMS_BERNOULLI
                     bernoulli += 1u;
                     if (ok && manifold_same_solution(dir, st.target.xyz, pc.uniquenessThreshold)) {
-                        st.value.rgb *= st.target.w / st.wo.w;
+                        st.x1.w = st.target.w / st.wo.w;
                         status = PSMS_DONE;
                     } else {
                         st.target.w += 1.0;
                         if (st.target.w >= float(pc.maxTrials)) {
                             capped += 1u;
                             st.counts.w = 1u;
-                            st.value.rgb *= pc.trialCap == TRIAL_CAP_DROP ? 0.0 : st.target.w / st.wo.w;
+                            st.x1.w = pc.trialCap == TRIAL_CAP_DROP ? 0.0 : st.target.w / st.wo.w;
                             status = PSMS_DONE;
                         }
                     }

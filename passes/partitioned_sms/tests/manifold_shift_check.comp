@@ -1,0 +1,59 @@
+#version 460
+// Test kernel (test_manifold_restir.cpp): the manifold shift on PartitionedSMS's reservoirs.
+// Per pixel with a sample x (else all -3):
+//   x: |T_c->c(x).x1 - x.x1| (the shift to its own pixel; -1 when it fails)
+//   y: |F(T_c->c(x)) - F(x)| / |F(x)|
+//   z: |T_q->c(T_c->q(x)).x1 - x.x1| for the receiver q = c + (5, 2), both shifts with the walk
+//      back (-1: T_c->q failed, -2: it succeeded and its inverse failed; -3: no receiver at q)
+//   w: the same with the walk back off, -1 / -2 / -3 as for z
+#include "lib/manifold/shift.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(std430) readonly buffer ReservoirsIn {
+    ManifoldReservoirHeader header_in;
+    ManifoldReservoir reservoirs_in[];
+};
+layout(rgba32f) uniform writeonly image2D outputImage;
+layout(push_constant) uniform Params { uvec2 frameSize; } pc;
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, pc.frameSize))) return;
+    ManifoldReservoir rc = reservoirs_in[pixel.y * pc.frameSize.x + pixel.x];
+    vec4 out_value = vec4(-3.0);
+    if (rc.weight.x > 0.0) {
+        ManifoldShiftSettings ss;
+        ss.ms.constraint = MANIFOLD_CONSTRAINT_ANGLE_DIFFERENCE;
+        ss.ms.max_iterations = 5u;
+        ss.ms.solver_threshold = 1e-5;
+        ss.ms.min_segment = 1e-4;
+        ss.ms.max_chain = 2u;
+        ss.uniqueness_threshold = 1e-5;
+        ss.geometric_clamp = 0.0;
+        ss.bijective = true;
+        ManifoldSample t;
+        vec3 F;
+        out_value.x = -1.0;
+        if (manifold_shift(rc.s, rc.receiver, false, rc.receiver, false, ss, t, F)) {
+            out_value.x = length(t.x1.xyz - rc.s.x1.xyz);
+            out_value.y = length(F - rc.F.rgb) / length(rc.F.rgb);
+        }
+        uvec2 q = pixel + uvec2(5u, 2u);
+        if (all(lessThan(q, pc.frameSize))) {
+            ManifoldReservoir rq = reservoirs_in[q.y * pc.frameSize.x + q.x];
+            for (uint b = 0u; b < 2u && primary_valid(rq.receiver); ++b) {
+                ss.bijective = b == 0u;
+                float r = -1.0;
+                ManifoldSample back;
+                if (manifold_shift(rc.s, rc.receiver, false, rq.receiver, false, ss, t, F)) {
+                    r = -2.0;
+                    if (manifold_shift(t, rq.receiver, false, rc.receiver, false, ss, back, F))
+                        r = length(back.x1.xyz - rc.s.x1.xyz);
+                }
+                if (b == 0u) out_value.z = r;
+                else out_value.w = r;
+            }
+        }
+    }
+    imageStore(outputImage, ivec2(pixel), out_value);
+}

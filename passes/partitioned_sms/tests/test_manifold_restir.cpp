@@ -1,0 +1,180 @@
+// Spatiotemporal reuse of caustic reservoirs with the manifold shift (Hong et al. 2025 Sec. 5;
+// passes/partitioned_sms/ManifoldReuse.cpp, shaders/lib/manifold/shift.glsl): the shift to
+// its own pixel reproduces the sample, T^-1(T(x)) = x for accepted shifts, and psms with
+// temporal and spatial reuse (static and moving camera) matches the reference path tracer and
+// unbiased SMS; without the walk back (bijectivity off) the comparison must fail.
+// Frames of one reuse sequence are correlated: the independent unit is a sequence (history
+// reset, new seed), and its mean image is one sample (tests/support/ReuseComparison.h).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "core/graph/Renderer.h"
+#include "core/scene/SceneLoader.h"
+#include "tests/support/GpuSupport.h"
+#include "tests/support/RegionStats.h"
+#include "tests/support/ReuseComparison.h"
+
+namespace loom {
+namespace {
+
+using test::RegionStats;
+using test::restirGraph;
+using test::sourcePath;
+
+// `sequences` runs of `frames` frames (frame f at time f dt); per port the statistics of each
+// run's mean luminance over 2 x 2 regions.
+std::vector<RegionStats> sequencePorts(std::unique_ptr<RenderGraph> g, const scene::Scene& scene,
+                                       const std::vector<std::string>& ports, int sequences,
+                                       int frames, float dt, uint32_t size, uint32_t seed) {
+    Renderer r(test::gpuContext(), std::move(g), size, size, 1);
+    r.setScene(scene);
+    std::vector<RegionStats> stats(ports.size(), RegionStats(2));
+    for (int s = 0; s < sequences; ++s) {
+        r.setSeed(seed + 7919u * uint32_t(s));
+        r.reset();
+        std::vector<ImageData> mean(ports.size());
+        for (int f = 0; f < frames; ++f) {
+            r.setTime(f * dt);
+            r.frame();
+            for (size_t p = 0; p < ports.size(); ++p) {
+                ImageData img = r.readOutput(ports[p]);
+                if (f == 0) {
+                    mean[p] = img;
+                } else {
+                    for (size_t i = 0; i < img.pixels.size(); ++i)
+                        mean[p].pixels[i] += img.pixels[i];
+                }
+            }
+        }
+        for (size_t p = 0; p < ports.size(); ++p) {
+            for (auto& v : mean[p].pixels) v /= float(frames);
+            stats[p].add(test::toLuminance(mean[p]));
+        }
+    }
+    return stats;
+}
+
+struct Agreement {
+    double zPt, zSms;  // worst |z|: full image against PT, caustic against SMS
+};
+
+constexpr uint32_t kSize = 32;
+constexpr int kFrames = 8;
+
+// graphFile's last reuse pass (`stage`) against PT (full image) and SMS (caustic), at the
+// same frame times. A large trial cap and 1024 presamples (the prior's tails, test_psms.cpp).
+Agreement compareReuse(const std::string& sceneFile, const std::string& graphFile,
+                       const std::string& stage, const json& overrides, float dt, int sequences) {
+    if (const char* k = std::getenv("LOOM_PSMS_FRAME_SCALE"))
+        sequences *= std::max(1, std::atoi(k));
+    auto scene = scene::loadScene(sourcePath(sceneFile));
+    json o = {
+        {"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}, {"prior.presamples", 1024}};
+    for (auto& [k, v] : overrides.items()) o[k] = v;
+    auto reuse =
+        sequencePorts(restirGraph(graphFile, o), scene, {stage + ".color", stage + ".caustic"},
+                      sequences, kFrames, dt, kSize, 11);
+    // References per scene, camera motion and sequence count.
+    static std::map<std::string, std::pair<RegionStats, RegionStats>> references;
+    std::string key = sceneFile + "@" + std::to_string(dt) + "x" + std::to_string(sequences);
+    auto ref = references.find(key);
+    if (ref == references.end()) {
+        auto pt = sequencePorts(test::ptGraph(16, 9), scene, {"pt.color"}, sequences, kFrames, dt,
+                                kSize, 23);
+        auto sms = sequencePorts(restirGraph("sms.json"), scene, {"sms.caustic"}, sequences,
+                                 kFrames, dt, kSize, 29);
+        ref = references.emplace(key, std::make_pair(pt[0], sms[0])).first;
+    }
+    const auto& [pt, sms] = ref->second;
+    for (int i = 0; i < 4; ++i)
+        std::printf(
+            "%s region %d: full %.5f +- %.5f vs pt %.5f +- %.5f; caustic %.5f +- %.5f vs "
+            "sms %.5f +- %.5f\n",
+            graphFile.c_str(), i, reuse[0].mean(i * 3), std::sqrt(reuse[0].stderr2(i * 3)),
+            pt.mean(i * 3), std::sqrt(pt.stderr2(i * 3)), reuse[1].mean(i * 3),
+            std::sqrt(reuse[1].stderr2(i * 3)), sms.mean(i * 3), std::sqrt(sms.stderr2(i * 3)));
+    Agreement a{test::maxZ(reuse[0], pt), test::maxZ(reuse[1], sms)};
+    std::printf("%s %s dt %.1f: worst |z| %.2f against PT, %.2f against SMS\n", graphFile.c_str(),
+                overrides.dump().c_str(), dt, a.zPt, a.zSms);
+    return a;
+}
+
+// The shift on PartitionedSMS's samples of one frame (manifold_shift_check.comp).
+TEST(ManifoldShift, ReproducesTheSampleAtItsPixelAndInvertsWhereAccepted) {
+    auto scene = scene::loadScene(sourcePath("scenes/wavy_slab.json"));
+    test::TempDir dir("loom-manifold-shift");
+    json g = restirGraph("psms_restir.json")->toJson();
+    g["passes"].push_back(
+        {{"name", "check"},
+         {"type", "ComputePass"},
+         {"params",
+          {{"shader", sourcePath("passes/partitioned_sms/tests/manifold_shift_check.comp")},
+           {"inputs", {{"reservoirs", {{"glsl", "ReservoirsIn"}, {"kind", "buffer"}}}}},
+           {"outputs", {{"output", {{"glsl", "outputImage"}}}}}}}});
+    g["edges"].push_back({"psms.reservoirs", "check.reservoirs"});
+    g["outputs"] = {"check.output"};
+    Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), dir / "graph.json"), 64, 64, 1);
+    r.setScene(scene);
+    int samples = 0, own = 0, forward = 0, inverted = 0, forwardOff = 0, invertedOff = 0;
+    double worstOwn = 0, worstOwnF = 0, worstInverse = 0;
+    for (int f = 0; f < 4; ++f) {
+        r.frame();
+        ImageData out = r.readOutput("check.output");
+        for (uint32_t i = 0; i < out.width * out.height; ++i) {
+            const float* v = &out.pixels[i * 4];
+            if (v[0] == -3.0f) continue;
+            ++samples;
+            if (v[0] >= 0.0f) {
+                ++own;
+                worstOwn = std::max(worstOwn, double(v[0]));
+                worstOwnF = std::max(worstOwnF, double(v[1]));
+            }
+            if (v[2] >= 0.0f || v[2] == -2.0f) ++forward;
+            if (v[2] >= 0.0f) {
+                ++inverted;
+                worstInverse = std::max(worstInverse, double(v[2]));
+            }
+            if (v[3] >= 0.0f || v[3] == -2.0f) ++forwardOff;
+            if (v[3] >= 0.0f && v[3] < 1e-4f) ++invertedOff;
+        }
+    }
+    std::printf(
+        "%d samples: own pixel %d (worst |dx1| %.2g, |dF|/|F| %.2g); to q and back: %d of "
+        "%d accepted shifts invert (worst %.2g); walk back off: %d of %d invert\n",
+        samples, own, worstOwn, worstOwnF, inverted, forward, worstInverse, invertedOff,
+        forwardOff);
+    ASSERT_GT(samples, 200);
+    EXPECT_EQ(own, samples) << "the shift to its own pixel failed";
+    EXPECT_LT(worstOwn, 1e-4);
+    EXPECT_LT(worstOwnF, 1e-3);
+    ASSERT_GT(forward, 50);
+    EXPECT_EQ(inverted, forward) << "an accepted shift's inverse failed";
+    EXPECT_LT(worstInverse, 1e-4);
+}
+
+TEST(ManifoldReSTIR, UnbiasedOnTheCurvedMirrorStaticAndMovingCamera) {
+    for (float dt : {0.0f, 3.0f}) {
+        auto a =
+            compareReuse("scenes/curved_mirror.json", "psms_restir.json", "spatial", {}, dt, 48);
+        EXPECT_LT(a.zPt, 3.0) << "dt " << dt;
+        EXPECT_LT(a.zSms, 3.0) << "dt " << dt;
+    }
+}
+
+TEST(ManifoldReSTIR, UnbiasedThroughTheWavySlabMovingCamera) {
+    auto a = compareReuse("scenes/wavy_slab.json", "psms_restir.json", "spatial", {}, 3.0f, 16);
+    EXPECT_LT(a.zPt, 3.0);
+    EXPECT_LT(a.zSms, 3.0);
+}
+
+TEST(ManifoldReSTIR, TemporalOnlyUnbiasedOnTheCurvedMirrorMovingCamera) {
+    auto a = compareReuse("scenes/curved_mirror.json", "psms_temporal_only.json", "temporal", {},
+                          3.0f, 16);
+    EXPECT_LT(a.zPt, 3.0);
+    EXPECT_LT(a.zSms, 3.0);
+}
+
+}  // namespace
+}  // namespace loom
