@@ -18,6 +18,7 @@ layout(push_constant) uniform Params {
     uvec2 frameSize;
     uint frameIndex;
     uint seed;
+    uint historyReset;  // the previous-frame reservoirs hold no frame yet (Renderer::reset)
     uint constraint;
     uint shiftIterations;
     float solverThreshold;
@@ -52,10 +53,10 @@ void main() {
         manifold_reuse_finish(pixel, index, rc, 0u, 0u);
         return;
     }
-    // History made under the same frame size and chain length only (the first frame, and the
-    // frame after a change, have none).
+    // History made under the same frame size and chain length only (the first frame, the frame
+    // after a reset and the frame after a change have none).
     ManifoldReservoirHeader hp = header_prev;
-    bool history = hp.info.x == MANIFOLD_RESERVOIR_MAGIC && all(equal(hp.info.yz, pc.frameSize)) &&
+    bool history = pc.historyReset == 0u && hp.info.x == MANIFOLD_RESERVOIR_MAGIC && all(equal(hp.info.yz, pc.frameSize)) &&
                    hp.info.w == header_in.info.w;
     ivec2 q;
     ManifoldReservoir rh;
