@@ -63,6 +63,8 @@ configs=(
   "sms_biased|graphs/sms_biased.json|$sphere"
   "mnee|graphs/mnee.json|$sphere"
   "sms_slab|graphs/sms.json|$slab"
+  "psms_slab|graphs/psms.json|$slab"
+  "psms_restir_slab|graphs/psms_restir.json|$slab"
   "area_restir_fine|graphs/area_restir.json|$fine"
   "splat|graphs/splat.json|$fine"
   "splat_backup|graphs/splat_backup.json|$fine"

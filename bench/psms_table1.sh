@@ -4,7 +4,9 @@
 # ms per stage) for unbiased SMS (graphs/sms.json) against ours (graphs/psms.json: N = 16,
 # 3 x 3 trust regions, 128 trials, prior on) and partitioning alone (graphs/psms_no_prior.json),
 # at equal walk settings (20 Newton iterations, threshold 1e-5), with the paper's numbers
-# beside. Prints tables; never asserts. BUILD defaults to build-bench.
+# beside; graphs/psms_restir.json adds the temporal and spatial reuse stages' ms (the success
+# columns are psms's, the same pass). Prints tables; never asserts. BUILD defaults to
+# build-bench.
 #
 #   bash bench/psms_table1.sh                      # 256x256, 4 frames
 #   WIDTH=64 HEIGHT=64 FRAMES=2 bash bench/psms_table1.sh
@@ -20,10 +22,10 @@ scenes="scenes/wavy_slab.json scenes/refractive_caustic.json scenes/glass_sphere
 s=../shared/scenes/sms-plane/plane_sms_constfloor.xml
 [ -e "$s" ] && scenes="$scenes $s"
 mkdir -p out/psms_table1
-printf "\n%-26s %-14s %9s %12s %12s %12s %9s %9s %8s\n" scene method success iter/sample \
-    trials/sol iter/sol "prior ms" "sample ms" capped
+printf "\n%-26s %-14s %9s %12s %12s %12s %9s %9s %9s %9s %8s\n" scene method success \
+    iter/sample trials/sol iter/sol "prior ms" "sample ms" "temp. ms" "spat. ms" capped
 for scene in $scenes; do
-    for g in sms psms_no_prior psms; do
+    for g in sms psms_no_prior psms psms_restir; do
         name=$(basename "$scene")
         log=out/psms_table1/$name.$g.log
         node=$([ "$g" = sms ] && echo sms || echo psms)
@@ -35,10 +37,11 @@ for scene in $scenes; do
         fi
         get() { grep "^$node\.$1 = " "$log" | awk '{print $3}'; }
         ms() { awk -v n="$1" '$1 == n {print $2}' "$log" | head -1; }
-        prior=$(ms prior)
-        printf "%-26s %-14s %9.3f %12.2f %12.2f %12.1f %9s %9s %8s\n" "$name" "$g" \
+        prior=$(ms prior) temporal=$(ms temporal) spatial=$(ms spatial)
+        printf "%-26s %-14s %9.3f %12.2f %12.2f %12.1f %9s %9s %9s %9s %8s\n" "$name" "$g" \
             "$(get successRate)" "$(get iterationsPerSample)" "$(get trialsPerSolution)" \
-            "$(get iterationsPerSolution)" "${prior:--}" "$(ms $node)" "$(get capped)"
+            "$(get iterationsPerSolution)" "${prior:--}" "$(ms $node)" "${temporal:--}" \
+            "${spatial:--}" "$(get capped)"
     done
 done
 cat <<'PAPER'

@@ -4,6 +4,7 @@
 // sequence of frames), so the spread of the added values gives the standard error.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "core/image/Image.h"
@@ -16,17 +17,19 @@ struct RegionStats {
     std::vector<double> sum, sum2;
     int frames = 0;
     explicit RegionStats(int r) : regions(r), sum(r * r * 3, 0.0), sum2(r * r * 3, 0.0) {}
-    void add(const ImageData& img) {
+    // skip: optional per-pixel mask (non-zero: left out of its region's mean).
+    void add(const ImageData& img, const std::vector<uint8_t>* skip = nullptr) {
         std::vector<double> m(regions * regions * 3, 0.0);
         std::vector<int> count(regions * regions, 0);
         for (uint32_t y = 0; y < img.height; ++y)
             for (uint32_t x = 0; x < img.width; ++x) {
+                if (skip && (*skip)[y * img.width + x]) continue;
                 int r = int(y * regions / img.height) * regions + int(x * regions / img.width);
                 for (int c = 0; c < 3; ++c) m[r * 3 + c] += img.at(x, y, c);
                 ++count[r];
             }
         for (size_t i = 0; i < m.size(); ++i) {
-            double v = m[i] / count[i / 3];
+            double v = count[i / 3] > 0 ? m[i] / count[i / 3] : 0.0;
             sum[i] += v;
             sum2[i] += v * v;
         }

@@ -2,7 +2,7 @@
 // passes/partitioned_sms/ManifoldReuse.cpp, shaders/lib/manifold/shift.glsl): the shift to
 // its own pixel reproduces the sample, T^-1(T(x)) = x for accepted shifts, and psms with
 // temporal and spatial reuse (static and moving camera) matches the reference path tracer and
-// unbiased SMS; without the walk back (bijectivity off) the comparison must fail.
+// unbiased SMS. The walk-back ablation (bijectivity off) is not yet shown to fail (below).
 // Frames of one reuse sequence are correlated: the independent unit is a sequence (history
 // reset, new seed), and its mean image is one sample (tests/support/ReuseComparison.h).
 #include <gtest/gtest.h>
@@ -24,10 +24,11 @@ using test::restirGraph;
 using test::sourcePath;
 
 // `sequences` runs of `frames` frames (frame f at time f dt); per port the statistics of each
-// run's mean luminance over 2 x 2 regions.
+// run's mean luminance over 2 x 2 regions, without the pixels `skip` marks (port 0 only).
 std::vector<RegionStats> sequencePorts(std::unique_ptr<RenderGraph> g, const scene::Scene& scene,
                                        const std::vector<std::string>& ports, int sequences,
-                                       int frames, float dt, uint32_t size, uint32_t seed) {
+                                       int frames, float dt, uint32_t size, uint32_t seed,
+                                       const std::vector<uint8_t>* skip = nullptr) {
     Renderer r(test::gpuContext(), std::move(g), size, size, 1);
     r.setScene(scene);
     std::vector<RegionStats> stats(ports.size(), RegionStats(2));
@@ -50,10 +51,40 @@ std::vector<RegionStats> sequencePorts(std::unique_ptr<RenderGraph> g, const sce
         }
         for (size_t p = 0; p < ports.size(); ++p) {
             for (auto& v : mean[p].pixels) v /= float(frames);
-            stats[p].add(test::toLuminance(mean[p]));
+            stats[p].add(test::toLuminance(mean[p]), p == 0 ? skip : nullptr);
         }
     }
     return stats;
+}
+
+// Pixels that see an emitter directly at any of the frame times (a 0-bounce path tracer), grown
+// by a pixel. At 1 spp a small visible emitter covers a region through a handful of jittered
+// hits of radiance 40 each, a count noise that swamps the full-image comparison and is the
+// same code in both images (primary rays, emission); the composition is tested elsewhere.
+std::vector<uint8_t> directEmitterPixels(const scene::Scene& scene, int frames, float dt,
+                                         uint32_t size) {
+    Renderer r(test::gpuContext(), test::ptGraph(16, 0), size, size, 1);
+    r.setScene(scene);
+    std::vector<uint8_t> seen(size * size, 0), grown(size * size, 0);
+    for (int f = 0; f < frames; ++f) {
+        r.setTime(f * dt);
+        r.frame();
+        ImageData img = r.readOutput("pt.color");
+        for (uint32_t i = 0; i < size * size; ++i)
+            if (img.pixels[i * img.channels] + img.pixels[i * img.channels + 1] +
+                    img.pixels[i * img.channels + 2] >
+                0.0f)
+                seen[i] = 1;
+    }
+    for (uint32_t y = 0; y < size; ++y)
+        for (uint32_t x = 0; x < size; ++x)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int u = int(x) + dx, v = int(y) + dy;
+                    if (u >= 0 && v >= 0 && u < int(size) && v < int(size) && seen[v * size + u])
+                        grown[y * size + x] = 1;
+                }
+    return grown;
 }
 
 struct Agreement {
@@ -70,6 +101,7 @@ constexpr int kFrames = 8;
 
 // graphFile's last reuse pass (`stage`) against PT (full image) and SMS (caustic), at the
 // same frame times. A large trial cap and 1024 presamples (the prior's tails, test_psms.cpp).
+// The full image leaves out the pixels that see the emitter directly (directEmitterPixels).
 Agreement compareReuse(const std::string& sceneFile, const std::string& graphFile,
                        const std::string& stage, const json& overrides, float dt, int sequences) {
     if (const char* k = std::getenv("LOOM_PSMS_FRAME_SCALE"))
@@ -78,16 +110,17 @@ Agreement compareReuse(const std::string& sceneFile, const std::string& graphFil
     json o = {
         {"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}, {"prior.presamples", 1024}};
     for (auto& [k, v] : overrides.items()) o[k] = v;
+    auto skip = directEmitterPixels(scene, kFrames, dt, kSize);
     auto reuse =
         sequencePorts(restirGraph(graphFile, o), scene, {stage + ".color", stage + ".caustic"},
-                      sequences, kFrames, dt, kSize, seedBase());
+                      sequences, kFrames, dt, kSize, seedBase(), &skip);
     // References per scene, camera motion and sequence count.
     static std::map<std::string, std::pair<RegionStats, RegionStats>> references;
     std::string key = sceneFile + "@" + std::to_string(dt) + "x" + std::to_string(sequences);
     auto ref = references.find(key);
     if (ref == references.end()) {
         auto pt = sequencePorts(test::ptGraph(16, 9), scene, {"pt.color"}, sequences, kFrames, dt,
-                                kSize, 23);
+                                kSize, 23, &skip);
         auto sms = sequencePorts(restirGraph("sms.json"), scene, {"sms.caustic"}, sequences,
                                  kFrames, dt, kSize, 29);
         ref = references.emplace(key, std::make_pair(pt[0], sms[0])).first;
@@ -179,6 +212,27 @@ TEST(ManifoldReSTIR, TemporalOnlyUnbiasedOnTheCurvedMirrorMovingCamera) {
                           3.0f, 16);
     EXPECT_LT(a.zPt, 3.0);
     EXPECT_LT(a.zSms, 3.0);
+}
+
+// Disabled (open, issue 16): the walk-back ablation is not yet shown to be detected. On the bumpy
+// mirror (a floor point sees the light through several reflection points) both variants read the
+// same, and both low: 16 static sequences, region 0 caustic 0.0106 (walk back on) and 0.0107
+// (off) against SMS 0.0150 +- 0.0007 (|z| 3.65 and 3.27), so shifts that the walk back rejects
+// are rare there, and psms on this multi-solution mirror shares the glass sphere's open low
+// reading (test_psms.cpp). Run with --gtest_also_run_disabled_tests.
+TEST(ManifoldReSTIR, DISABLED_WalkBackOffIsDetected) {
+    int sequences = 16;
+    if (const char* s = std::getenv("LOOM_PSMS_ABLATION_SEQUENCES")) sequences = std::atoi(s);
+    auto on = compareReuse("scenes/bumpy_mirror.json", "psms_restir.json", "spatial", {}, 0.0f,
+                           sequences);
+    auto off = compareReuse("scenes/bumpy_mirror.json", "psms_restir.json", "spatial",
+                            {{"temporal.bijectivity", false}, {"spatial.bijectivity", false}}, 0.0f,
+                            sequences);
+    std::printf("bumpy mirror: walk back on |z| %.2f, off |z| %.2f against SMS\n", on.zSms,
+                off.zSms);
+    EXPECT_LT(on.zSms, 3.0);
+    EXPECT_LT(on.zPt, 3.0);
+    EXPECT_GT(off.zSms, 6.0) << "reuse without the walk back went unseen";
 }
 
 // Control for the moving-camera comparisons: psms without reuse, at the same frame times.
