@@ -13,6 +13,7 @@
 #include "core/util/Log.h"
 #include "passes/partitioned_sms/ManifoldPairs.h"
 #include "passes/partitioned_sms/ManifoldReuse.h"
+#include "passes/sms/ManifoldParams.h"
 
 namespace loom {
 
@@ -55,36 +56,11 @@ public:
         r.param("alpha", 0.8)
             .range(0.0, 0.99)
             .doc("weight of the prior in the pair choice and the seed mixture (Eq. 7)");
-        r.paramEnum("constraint", "angle_difference", shaderEnum("MANIFOLD_CONSTRAINT"))
-            .doc("specular constraint of the walk (Zeltner et al. Sec. 5.1)");
-        r.param("maxIterations", 20).range(1, 1000).doc("Newton steps per walk (halvings count)");
-        r.param("solverThreshold", 1e-5).min(0).doc("convergence: every |C_i| below this");
-        r.param("uniquenessThreshold", 1e-5)
-            .min(0)
-            .doc("two solutions are one when their first directions d satisfy |d.d' - 1| < this");
+        reflectManifoldWalk(r);
         r.param("maxTrials", 128).min(1).doc("Bernoulli trials before the cap (paper: 128)");
         r.paramEnum("trialCap", "keep", {"drop", "keep"})
             .doc("at the cap: keep the sample with K = maxTrials (paper) or drop it (SMS code)");
-        r.param("maxChain", 2)
-            .range(1, 4)
-            .doc("specular vertices of a chain (1: single scattering; 2: sphere, slab)");
-        r.param("geometricTermClamp", 0.0)
-            .min(0)
-            .doc("clamp of the generalized geometric term (0 = off; biased)");
-        r.param("maxBounces", 9).range(0, 64).doc("path tracer: scattering events per path");
-        r.param("rrDepth", 5)
-            .range(1, 64)
-            .doc("path tracer: Russian roulette after this many bounces");
-        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
-            .doc("path tracer: NEE/BSDF MIS");
-        r.param("excludeCovered", true)
-            .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
-        r.param("trialDispatches", 16)
-            .range(1, 100000)
-            .doc("dispatches per frame the walks may span; unfinished estimates count as capped");
-        r.param("stepBudget", 32768)
-            .range(1024, 60000)
-            .doc("BVH steps per invocation and dispatch (lavapipe ends loops at 65535)");
+        reflectCausticPath(r, 16);
     }
     void execute(ExecuteContext& ctx) override {
         const auto& scene = ctx.scene();
