@@ -3,7 +3,9 @@
 # reference, in the caustic region (scripts/sms_equal_time.lua): PT, unbiased SMS, psms, psms +
 # temporal reuse and psms + ReSTIR (bench/data/psms_configs.json); then the paper's Fig. 5
 # convergence, N = 4, 8, 16, 32 with and without the prior (bench/data/psms_fig5_configs.json).
-# Prints tables and writes convergence plots under out/; never asserts. BUILD defaults to
+# The first comparison also measures one frame's own image after PER_FRAME (8) frames, the error
+# a real-time estimator with reuse delivers per frame. Prints tables and writes convergence plots
+# under out/; never asserts. BUILD defaults to
 # build-bench.
 #
 #   bash bench/psms_equal_time.sh                              # 64x64, 4 s of GPU time each
@@ -16,6 +18,7 @@ common=(width="$W" height="$H" budget_ms="$BUDGET" steps="$STEPS" scenes="$SCENE
         ref_frames="${REF_FRAMES:-64}" ref_spp="${REF_SPP:-64}")
 echo "== equal time: SMS, psms, psms + temporal, psms + ReSTIR"
 "$LOOM" run scripts/sms_equal_time.lua "${common[@]}" configs=bench/data/psms_configs.json \
+    per_frame="${PER_FRAME:-8}" per_frame_sequences="${PER_FRAME_SEQUENCES:-4}" \
     out="$OUT/psms_equal_time"
 echo "== Fig. 5: tiles N and the prior"
 "$LOOM" run scripts/sms_equal_time.lua "${common[@]}" configs=bench/data/psms_fig5_configs.json \

@@ -16,8 +16,14 @@
 --   - energy: luminance summed over the caustic region relative to the reference (the energy
 --     biased SMS and MNEE lose), and the same per block of a regions x regions grid (worst
 --     block shown, blocks under 5% of the average block's reference skipped; all in the CSV).
+-- per_frame=F (default 0, off) also measures one frame's own image: the relMSE in the caustic
+-- region of frame F of a fresh sequence (frame F's image = F acc_F - (F - 1) acc_{F-1} of the
+-- graph's accumulated output), averaged over per_frame_sequences (4) sequences, with that
+-- frame's GPU ms: what a real-time estimator with reuse delivers per frame, where the
+-- accumulated error above counts its frames' correlation against it.
 -- Arguments: scenes (comma list; missing files are skipped), width, height, budget_ms, steps,
--- ref_frames, ref_spp, mask_frames, mask_fraction, regions, seed, configs, out.
+-- ref_frames, ref_spp, mask_frames, mask_fraction, regions, seed, configs, out, per_frame,
+-- per_frame_sequences.
 -- Writes OUT/sms_equal_time.csv (every step), OUT/sms_regions.csv (energy per block),
 -- OUT/<scene>_caustic_relmse.png/.svg (convergence), OUT/<scene>_mask.png; prints tables.
 local util = require("util")
@@ -34,6 +40,7 @@ local out = loom.arg("out", "out/sms_equal_time")
 local scenes = loom.arg("scenes", {"scenes/glass_sphere.json", "scenes/curved_mirror.json",
                                    "scenes/wavy_slab.json"})
 local configs = loom.read_json(util.resolve(loom.arg("configs", "bench/data/sms_configs.json")))
+local per_frame, per_frame_sequences = loom.arg("per_frame", 0), loom.arg("per_frame_sequences", 4)
 
 local function lum(r, g, b) return 0.2126 * r + 0.7152 * g + 0.0722 * b end
 
@@ -139,6 +146,35 @@ for _, scene_arg in ipairs(scenes) do
                    ms_per_frame = spent / frames, relmse = rows[#rows].relmse,
                    relmse_caustic = last.relmse, energy_caustic = last.energy,
                    worst_block = worst}
+      if per_frame > 0 then
+        -- Frame per_frame's own image in fresh sequences (accumulation differences).
+        local err, ms = 0, 0
+        for k = 1, per_frame_sequences do
+          local q = loom.renderer{graph = cfg.graph, scene = scene, width = width,
+                                  height = height, seed = seed + 104729 * k,
+                                  params = cfg.params or {}}
+          local prev
+          for f = 1, per_frame do
+            q:frame()
+            if f == per_frame - 1 then prev = q:image(cfg.output or "accum.output") end
+          end
+          ms = ms + q:timings().frame_ms / per_frame_sequences
+          local acc = q:image(cfg.output or "accum.output")
+          local img = loom.new_image(width, height)
+          for y = 0, height - 1 do
+            for x = 0, width - 1 do
+              local a1, a2, a3 = acc:get(x, y)
+              local b1, b2, b3 = 0, 0, 0
+              if prev then b1, b2, b3 = prev:get(x, y) end
+              img:set(x, y, per_frame * a1 - (per_frame - 1) * b1,
+                      per_frame * a2 - (per_frame - 1) * b2, per_frame * a3 - (per_frame - 1) * b3)
+            end
+          end
+          err = err + measure(img, ref, mask).relmse / per_frame_sequences
+          q:close()
+        end
+        row.frame_relmse, row.frame_ms = err, ms
+      end
       if c == 1 then pt_final = row end
       -- PT's error at this configuration's time: relMSE ~ 1 / time.
       row.ratio = (pt_final.relmse_caustic * pt_final.gpu_ms) / (last.relmse * spent)
@@ -167,3 +203,13 @@ util.print_table({{key = "scene"}, {key = "config"}, {key = "frames"},
                   {key = "ratio", title = "ratio vs PT", fmt = "%.2f"},
                   {key = "energy_caustic", title = "energy caustic", fmt = "%.3f"},
                   {key = "worst_block", title = "worst block", fmt = "%.3f"}}, summary)
+if per_frame > 0 then
+  print(string.format("\none frame's image (frame %d of a fresh sequence, mean over %d sequences): "
+                      .. "relMSE in the caustic region, its GPU ms, and their product", per_frame,
+                      per_frame_sequences))
+  for _, row in ipairs(summary) do row.frame_cost = row.frame_relmse * row.frame_ms end
+  util.print_table({{key = "scene"}, {key = "config"},
+                    {key = "frame_relmse", title = "frame relMSE caustic", fmt = "%.4g"},
+                    {key = "frame_ms", title = "frame ms", fmt = "%.1f"},
+                    {key = "frame_cost", title = "relMSE x ms", fmt = "%.4g"}}, summary)
+end
