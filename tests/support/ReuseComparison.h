@@ -26,9 +26,8 @@ inline std::string sourcePath(const std::string& rel) {
     return std::string(LOOM_SOURCE_DIR) + "/" + rel;
 }
 
-// graphs/restir_pt*.json with shade.color as the output, parameters overridden.
-inline std::unique_ptr<RenderGraph> restirGraph(const std::string& file,
-                                                const json& overrides = {}) {
+// graphs/<file>, parameters overridden ("pass.param": value).
+inline std::unique_ptr<RenderGraph> loadGraph(const std::string& file, const json& overrides = {}) {
     auto g = RenderGraph::load(sourcePath("graphs/" + file));
     for (auto& [key, value] : overrides.items()) g->setParam(key, value);
     return g;
@@ -119,7 +118,7 @@ inline Comparison compareWithReference(const scene::Scene& scene, const std::str
     Comparison c;
     std::pair<RegionStats, RegionStats> restir{RegionStats(1), RegionStats(1)}, reference = restir;
     {
-        Renderer r(test::gpuContext(), restirGraph(graphFile, overrides), size, size, 1);
+        Renderer r(test::gpuContext(), loadGraph(graphFile, overrides), size, size, 1);
         r.setScene(scene);
         restir = sequenceStats(r, "shade.color", sequences, frames, dt);
     }

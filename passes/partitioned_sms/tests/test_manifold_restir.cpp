@@ -19,8 +19,8 @@
 namespace loom {
 namespace {
 
+using test::loadGraph;
 using test::RegionStats;
-using test::restirGraph;
 using test::sourcePath;
 
 // `sequences` runs of `frames` frames (frame f at time f dt); per port the statistics of each
@@ -113,7 +113,7 @@ Agreement compareReuse(const std::string& sceneFile, const std::string& graphFil
     for (auto& [k, v] : overrides.items()) o[k] = v;
     auto skip = directEmitterPixels(scene, kFrames, dt, kSize);
     auto reuse =
-        sequencePorts(restirGraph(graphFile, o), scene, {stage + ".color", stage + ".caustic"},
+        sequencePorts(loadGraph(graphFile, o), scene, {stage + ".color", stage + ".caustic"},
                       sequences, kFrames, dt, kSize, seedBase(), &skip);
     // References per scene, camera motion and sequence count.
     static std::map<std::string, std::pair<RegionStats, RegionStats>> references;
@@ -122,8 +122,8 @@ Agreement compareReuse(const std::string& sceneFile, const std::string& graphFil
     if (ref == references.end()) {
         auto pt = sequencePorts(test::ptGraph(16, 9), scene, {"pt.color"}, sequences, kFrames, dt,
                                 kSize, 23, &skip);
-        auto sms = sequencePorts(restirGraph("sms.json"), scene, {"sms.caustic"}, sequences,
-                                 kFrames, dt, kSize, 29);
+        auto sms = sequencePorts(loadGraph("sms.json"), scene, {"sms.caustic"}, sequences, kFrames,
+                                 dt, kSize, 29);
         ref = references.emplace(key, std::make_pair(pt[0], sms[0])).first;
     }
     const auto& [pt, sms] = ref->second;
@@ -144,7 +144,7 @@ Agreement compareReuse(const std::string& sceneFile, const std::string& graphFil
 TEST(ManifoldShift, ReproducesTheSampleAtItsPixelAndInvertsWhereAccepted) {
     auto scene = scene::loadScene(sourcePath("scenes/wavy_slab.json"));
     test::TempDir dir("loom-manifold-shift");
-    json g = restirGraph("psms_restir.json")->toJson();
+    json g = loadGraph("psms_restir.json")->toJson();
     g["passes"].push_back(
         {{"name", "check"},
          {"type", "ComputePass"},

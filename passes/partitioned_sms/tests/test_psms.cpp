@@ -16,6 +16,7 @@
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
 #include "tests/support/RegionStats.h"
+#include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
 
 namespace loom {
@@ -37,34 +38,10 @@ std::vector<test::RegionStats> frameStats(std::unique_ptr<RenderGraph> graph,
     for (int f = 0; f < frames; ++f) {
         r.frame();
         for (size_t p = 0; p < ports.size(); ++p) {
-            ImageData img = r.readOutput(ports[p]);
-            for (uint32_t i = 0; i < img.width * img.height; ++i) {
-                float* px = &img.pixels[i * img.channels];
-                float y = 0.2126f * px[0] + 0.7152f * px[1] + 0.0722f * px[2];
-                px[0] = px[1] = px[2] = y;
-            }
-            stats[p].add(img);
+            stats[p].add(test::toLuminance(r.readOutput(ports[p])));
         }
     }
     return stats;
-}
-
-std::unique_ptr<RenderGraph> graph(const std::string& file, const json& overrides = {}) {
-    auto g = RenderGraph::load(sourcePath("graphs/" + file));
-    for (auto& [key, value] : overrides.items()) g->setParam(key, value);
-    return g;
-}
-
-std::unique_ptr<RenderGraph> ptGraph(int spp) {
-    json g = {
-        {"name", "pt_reference"},
-        {"passes",
-         {{{"name", "pt"},
-           {"type", "PathTracer"},
-           {"params", {{"samplesPerPixel", spp}, {"maxBounces", 9}, {"motionBlur", false}}}}}},
-        {"edges", json::array()},
-        {"outputs", {"pt.color"}}};
-    return RenderGraph::parse(g.dump(), "<test>");
 }
 
 void printRegions(const char* what, const test::RegionStats& a, const test::RegionStats& b) {
@@ -91,14 +68,15 @@ Agreement compare(const std::string& sceneFile, const std::string& graphFile, co
     json o = {{"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}};
     if (graphFile == "psms.json") o["prior.presamples"] = 1024;
     for (auto& [k, v] : overrides.items()) o[k] = v;
-    auto psms = frameStats(graph(graphFile, o), scene, {"psms.color", "psms.caustic"}, frames, 2,
-                           kSize, 11);
+    auto psms = frameStats(test::loadGraph(graphFile, o), scene, {"psms.color", "psms.caustic"},
+                           frames, 2, kSize, 11);
     // The references depend on the scene only: rendered once per scene.
     static std::map<std::string, std::pair<test::RegionStats, test::RegionStats>> references;
     auto ref = references.find(sceneFile);
     if (ref == references.end()) {
-        auto pt = frameStats(ptGraph(32), scene, {"pt.color"}, 64, 2, kSize, 23);
-        auto sms = frameStats(graph("sms.json"), scene, {"sms.caustic"}, 128, 2, kSize, 29);
+        auto pt = frameStats(test::ptGraph(32, 9), scene, {"pt.color"}, 64, 2, kSize, 23);
+        auto sms =
+            frameStats(test::loadGraph("sms.json"), scene, {"sms.caustic"}, 128, 2, kSize, 29);
         ref = references.emplace(sceneFile, std::make_pair(pt[0], sms[0])).first;
     }
     const auto& [pt, sms] = ref->second;
@@ -515,7 +493,7 @@ TEST(PartitionedSMS, BadInputIsANamedError) {
                           const json& overrides, const std::string& what) {
         try {
             auto scene = scene::loadScene(sourcePath(sceneFile));
-            Renderer r(test::gpuContext(), graph(graphFile, overrides), 16, 16, 1);
+            Renderer r(test::gpuContext(), test::loadGraph(graphFile, overrides), 16, 16, 1);
             r.setScene(scene);
             r.frame();
             ADD_FAILURE() << "should fail: " << what;

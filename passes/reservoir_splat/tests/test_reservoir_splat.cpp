@@ -186,7 +186,7 @@ TEST(ReservoirSplat, ShiftIsInvertibleWithFiniteDifferenceJacobianAndUnitMis) {
 // splat gets one list entry and is resampled once; nothing is dropped. Forward motion and a zoom
 // (fine_geometry) land several splats in some pixels and none in others.
 TEST(ReservoirSplat, SplatsAreConserved) {
-    Renderer r(gpuContext(), restirGraph("splat.json"), 48, 48, 1);
+    Renderer r(gpuContext(), loadGraph("splat.json"), 48, 48, 1);
     r.loadScene(sourcePath("scenes/fine_geometry.json"));
     double maxPerPixel = 0, unreached = 0, offScreen = 0, occluded = 0;
     for (int f = 0; f < 6; ++f) {
@@ -224,7 +224,7 @@ TEST(ReservoirSplat, GatherModeIsAreaReSTIR) {
         for (int i = 0; i < 2; ++i) {
             json o = {{"temporal.areaReprojection", variant}};
             if (i == 1) o["temporal.mode"] = "gather";
-            Renderer r(gpuContext(), restirGraph(i == 0 ? "area_restir.json" : "splat.json", o), 32,
+            Renderer r(gpuContext(), loadGraph(i == 0 ? "area_restir.json" : "splat.json", o), 32,
                        32, 1);
             r.loadScene(sourcePath("scenes/cornell_box.json"));
             for (int f = 0; f < 3; ++f) {

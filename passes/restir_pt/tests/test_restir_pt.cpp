@@ -312,7 +312,7 @@ TEST(ReSTIRPT, ShiftToOwnPixelReproducesIntegrand) {
 TEST(ReSTIRPT, ShiftCountersAreConsistent) {
     // Threshold 0.5: the spheres with alpha <= 0.2 are not rough, so some paths need replay.
     Renderer r(test::gpuContext(),
-               restirGraph("restir_pt.json", {{"initial.roughnessThreshold", 0.5}}), 32, 32, 1);
+               loadGraph("restir_pt.json", {{"initial.roughnessThreshold", 0.5}}), 32, 32, 1);
     r.loadScene(sourcePath("scenes/glossy_spheres.json"));
     for (int f = 0; f < 3; ++f) r.frame();
     for (const char* name : {"temporal", "spatial"}) {

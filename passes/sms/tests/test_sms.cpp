@@ -17,6 +17,7 @@
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
 #include "tests/support/RegionStats.h"
+#include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
 
 namespace loom {
@@ -707,33 +708,9 @@ test::RegionStats frameStats(std::unique_ptr<RenderGraph> graph, const scene::Sc
     test::RegionStats stats(regions);
     for (int f = 0; f < frames; ++f) {
         r.frame();
-        ImageData img = r.readOutput(port);
-        for (uint32_t i = 0; i < img.width * img.height; ++i) {
-            float* p = &img.pixels[i * img.channels];
-            float y = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
-            p[0] = p[1] = p[2] = y;
-        }
-        stats.add(img);
+        stats.add(test::toLuminance(r.readOutput(port)));
     }
     return stats;
-}
-
-std::unique_ptr<RenderGraph> smsGraph(const std::string& file, const json& overrides = {}) {
-    auto g = RenderGraph::load(sourcePath("graphs/" + file));
-    for (auto& [key, value] : overrides.items()) g->setParam(key, value);
-    return g;
-}
-
-std::unique_ptr<RenderGraph> ptGraph(int spp) {
-    json g = {
-        {"name", "pt_reference"},
-        {"passes",
-         {{{"name", "pt"},
-           {"type", "PathTracer"},
-           {"params", {{"samplesPerPixel", spp}, {"maxBounces", 9}, {"motionBlur", false}}}}}},
-        {"edges", json::array()},
-        {"outputs", {"pt.color"}}};
-    return RenderGraph::parse(g.dump(), "<test>");
 }
 
 struct UnbiasedCheck {
@@ -746,9 +723,9 @@ struct UnbiasedCheck {
 UnbiasedCheck compareWithPathTracer(const scene::Scene& scene, const json& overrides, int smsFrames,
                                     int ptFrames, int ptSpp, int regions) {
     constexpr uint32_t kSize = 32;
-    auto sms = frameStats(smsGraph("sms.json", overrides), scene, "sms.color", smsFrames, regions,
-                          kSize, 11);
-    auto pt = frameStats(ptGraph(ptSpp), scene, "pt.color", ptFrames, regions, kSize, 23);
+    auto sms = frameStats(test::loadGraph("sms.json", overrides), scene, "sms.color", smsFrames,
+                          regions, kSize, 11);
+    auto pt = frameStats(test::ptGraph(ptSpp, 9), scene, "pt.color", ptFrames, regions, kSize, 23);
     UnbiasedCheck c;
     c.z = test::maxZ(sms, pt, &c.sms, &c.pt);
     for (int i = 0; i < regions * regions; ++i)
@@ -794,7 +771,7 @@ TEST(SpecularManifoldSampling, BadCausticTagsAreNamedErrors) {
         try {
             auto scene = sceneFromJson(sceneText, dir);
             ASSERT_FALSE(atLoad) << "loading should fail: " << what;
-            Renderer r(test::gpuContext(), smsGraph("sms.json"), 8, 8, 1);
+            Renderer r(test::gpuContext(), test::loadGraph("sms.json"), 8, 8, 1);
             r.setScene(scene);
             r.frame();
             FAIL() << "rendering should fail: " << what;
