@@ -130,6 +130,25 @@ std::vector<glm::vec3> gridSolutions(const std::vector<glm::vec4>& grid) {
     return found;
 }
 
+// Row 0 of psms_conditional.comp's input: receiver x0 (normal +y), a point light at `light`
+// (normal +y, alpha 0.8, 20 Newton steps), the caster and its bounding sphere, N, the mode, the
+// target's first direction, and the tile set as 32 mask rows of #I tiles.
+std::vector<glm::vec4> conditionalConfig(glm::vec3 x0, glm::vec3 light, glm::vec4 bound,
+                                         uint32_t caster, int tiles, int mode, glm::vec3 target,
+                                         uint32_t setSize, const std::vector<uint32_t>& rows) {
+    std::vector<glm::vec4> c = {glm::vec4(x0, mode),
+                                glm::vec4(0, 1, 0, tiles),
+                                glm::vec4(light, 0.8f),
+                                glm::vec4(0, 1, 0, 20),
+                                bound,
+                                glm::vec4(target, float(caster)),
+                                glm::vec4(1, 0, 0, float(setSize)),
+                                glm::vec4(0, 0, 1, 1e-5f)};
+    for (int r = 0; r < 32; ++r)
+        c.push_back(glm::vec4(float(rows[r] & 0xFFFFu), float(rows[r] >> 16), 0, 0));
+    return c;
+}
+
 // Hong et al. 2025 Eq. 8-9 at receiver point x0 for the solution with first direction
 // `target` (from gridSolutions; 0: the first the grid reaches): the mean of K / P(C) over
 // Bernoulli-trial draws in C(u*) equals 1 / P'(x*), P' integrated over a dense seed grid with
@@ -137,25 +156,14 @@ std::vector<glm::vec3> gridSolutions(const std::vector<glm::vec4>& grid) {
 // reach x*, less one, plus two far tiles.
 void checkConditional(const scene::Scene& scene, uint32_t caster, glm::vec3 x0, glm::vec3 light,
                       glm::vec4 bound, int tiles, bool prior, glm::vec3 target,
-                      uint32_t kGrid = 256) {
-    const glm::vec3 ng0(0, 1, 0);
+                      uint32_t gridSize = 256) {
     constexpr uint32_t kDraws = 128;
     auto config = [&](int mode, glm::vec3 t, uint32_t setSize, const std::vector<uint32_t>& rows) {
-        std::vector<glm::vec4> c = {glm::vec4(x0, mode),
-                                    glm::vec4(ng0, tiles),
-                                    glm::vec4(light, 0.8f),
-                                    glm::vec4(0, 1, 0, 20),
-                                    bound,
-                                    glm::vec4(t, float(caster)),
-                                    glm::vec4(1, 0, 0, float(setSize)),
-                                    glm::vec4(0, 0, 1, 1e-5f)};
-        for (int r = 0; r < 32; ++r)
-            c.push_back(glm::vec4(float(rows[r] & 0xFFFFu), float(rows[r] >> 16), 0, 0));
-        return c;
+        return conditionalConfig(x0, light, bound, caster, tiles, mode, t, setSize, rows);
     };
     std::vector<uint32_t> none(32, 0u);
     // The grid with no tile set: which seeds reach which solution.
-    auto grid = runConditional(scene, kGrid, config(0, glm::vec3(0), 0, none));
+    auto grid = runConditional(scene, gridSize, config(0, glm::vec3(0), 0, none));
     if (glm::length(target) < 0.5f) {
         auto found = gridSolutions(grid);
         ASSERT_FALSE(found.empty()) << "no seed reaches a solution";
@@ -165,7 +173,7 @@ void checkConditional(const scene::Scene& scene, uint32_t caster, glm::vec3 x0, 
         return g.w > 0.5f && std::abs(glm::dot(glm::vec3(g), target) - 1.0f) < 1e-5f;
     };
     auto tileOf = [&](uint32_t i) {
-        return glm::uvec2(i % kGrid * tiles / kGrid, i / kGrid * tiles / kGrid);
+        return glm::uvec2(i % gridSize * tiles / gridSize, i / gridSize * tiles / gridSize);
     };
     std::vector<uint32_t> rows(32, 0u);
     uint32_t setSize = 0;
@@ -195,7 +203,7 @@ void checkConditional(const scene::Scene& scene, uint32_t caster, glm::vec3 x0, 
     for (uint32_t i = 0; i < grid.size(); ++i)
         if (reaches(grid[i])) {
             pFine += density(i) / double(grid.size());
-            uint32_t x = i % kGrid, y = i / kGrid;
+            uint32_t x = i % gridSize, y = i / gridSize;
             if (x % 2 == 1 && y % 2 == 1) pCoarse += 4.0 * density(i) / double(grid.size());
         }
     ASSERT_GT(pFine, 0.0);
@@ -263,16 +271,8 @@ TEST(PartitionedSMS, TrialWeightPerSolutionWithSeveralSolutions) {
     for (glm::vec3 c :
          {glm::vec3(-0.45f, 0, 0.25f), glm::vec3(0.3f, 0, 0.4f), glm::vec3(-0.2f, 0, -0.3f),
           glm::vec3(0.6f, 0, -0.5f), glm::vec3(0.0f, 0, 0.0f), glm::vec3(0.8f, 0, 0.2f)}) {
-        std::vector<uint32_t> none(32, 0u);
-        std::vector<glm::vec4> cfg = {glm::vec4(c, 0),
-                                      glm::vec4(0, 1, 0, 16),
-                                      glm::vec4(light, 0.8f),
-                                      glm::vec4(0, 1, 0, 20),
-                                      bound,
-                                      glm::vec4(0, 0, 0, float(mirror)),
-                                      glm::vec4(1, 0, 0, 0),
-                                      glm::vec4(0, 0, 1, 1e-5f)};
-        for (int r = 0; r < 32; ++r) cfg.push_back(glm::vec4(0));
+        auto cfg = conditionalConfig(c, light, bound, mirror, 16, 0, glm::vec3(0), 0,
+                                     std::vector<uint32_t>(32, 0u));
         solutions = gridSolutions(runConditional(scene, 128, cfg));
         std::printf("x0 (%.2f, %.2f): %zu solutions\n", c.x, c.z, solutions.size());
         if (solutions.size() >= 2) {
