@@ -367,9 +367,13 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
     bvh.reset();
     device.reset();
 
+    const auto adjacencyStart = std::chrono::steady_clock::now();
     std::vector<glm::ivec3> adjacency = triangleAdjacency(triangles);
     out.adjacency.resize(adjacency.size());
     for (size_t i = 0; i < adjacency.size(); ++i) out.adjacency[i] = glm::ivec4(adjacency[i], 0);
+    out.stats.adjacencyMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - adjacencyStart)
+            .count();
 
     out.stats.nodes = uint32_t(out.nodes.size());
     out.stats.triangleRefs = uint32_t(out.triangles.size());

@@ -582,8 +582,18 @@ private:
                           [&] { return finish(makeCylinder(segs)); });
         } else if (type == "heightfield") {
             s.mesh = int(mScene.meshes.size());
-            mScene.meshes.push_back(finish(heightfield(j, ptr)));
+            mScene.meshes.push_back(finish(heightfield(j, ptr, &s.deformation)));
             mScene.meshes.back().name = s.name;
+            if (s.deformation)  // the same finishing (face normals, flips) every frame
+                s.deformation = [d = s.deformation, faceNormals, flip](float t) {
+                    Mesh m = d(t);
+                    if (faceNormals) {
+                        m.normals.clear();
+                        m.faceNormals = true;
+                    }
+                    if (flip) flipNormals(m);
+                    return m;
+                };
         } else if (type == "grass") {
             GrassParams g;
             int blades = integer(j, ptr, "blades", 500);
@@ -663,7 +673,9 @@ private:
         mScene.shapes.push_back(s);
     }
 
-    Mesh heightfield(const json& j, const std::string& ptr) {
+    // A formula that reads t also gives the per-frame mesh (an animated surface).
+    Mesh heightfield(const json& j, const std::string& ptr,
+                     std::function<Mesh(float)>* deformation) {
         glm::uvec2 res(64);
         if (const json* r = find(j, "resolution")) {
             if (r->is_number_integer())
@@ -682,8 +694,23 @@ private:
         if (hasFormula) {
             std::string text = string(j, ptr, "height", "");
             HeightFormula f = HeightFormula::parse(text, mSrc.where(child(ptr, "height")));
-            Mesh m =
-                makeHeightfield(res.x, res.y, [&](float x, float y) { return scale * f(x, y); });
+            // t = 0 here; SceneGpu tessellates an animated one at each frame's time.
+            Mesh m = makeHeightfield(res.x, res.y,
+                                     [&](float x, float y) { return scale * f(x, y, 0.0f); });
+            if (f.usesTime()) {
+                const std::string name = string(j, ptr, "name", "");
+                *deformation = [f, res, scale, name](float t) {
+                    Mesh d = makeHeightfield(res.x, res.y,
+                                             [&](float x, float y) { return scale * f(x, y, t); });
+                    d.name = name;
+                    for (const glm::vec3& p : d.positions)
+                        if (!std::isfinite(p.z))
+                            throw UserError(fmt::format(
+                                "heightfield '{}': formula is not finite at x = {}, y = {}, t = {}",
+                                name, p.x, p.y, t));
+                    return d;
+                };
+            }
             for (const glm::vec3& p : m.positions)
                 if (!std::isfinite(p.z))
                     fail(child(ptr, "height"),

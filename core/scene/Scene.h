@@ -6,6 +6,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,10 @@ struct Shape {
     // Optional per-frame motion (keyframes sorted by time; empty = static): object to world at
     // frame time t is shapeToWorldAt(shape, t) (Camera.h). Not blurred over the shutter.
     std::vector<ShapeKeyframe> path;
+    // Optional deformation (animated heightfields): the object-space mesh at frame time t, with
+    // the topology (indices) of `mesh`. SceneGpu re-tessellates the shape and rebuilds the BVH
+    // and the triangle adjacency every frame; empty = the mesh does not change.
+    std::function<Mesh(float)> deformation;
 };
 
 enum class LightType { Point, Spot, Directional, Environment, Constant };

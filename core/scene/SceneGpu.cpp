@@ -101,12 +101,13 @@ std::array<glm::vec4, 3> motionRows(const glm::mat4& prev, const glm::mat4& now)
 
 }  // namespace
 
-// Shapes with a per-frame path (Shape::path): where their vertices live, and the object to
-// world of the current and the previous frame time.
+// Shapes with a per-frame path (Shape::path) or a deformation (Shape::deformation): where
+// their vertices live, and the object to world of the current and the previous frame time.
 struct MovingShape {
     size_t shape;
     uint32_t firstVertex;
     glm::mat4 now, prev;
+    bool deforming = false;
 };
 
 struct SceneGpu::Impl {
@@ -162,10 +163,20 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
         // Moving shapes start at frame time 0 (setFrame moves them); the bounds cover their
         // keyframes so that light sampling discs (directional, environment) cover them.
         glm::mat4 toWorld = shapeToWorldAt(shape, shapeTime);
-        if (!shape.path.empty()) mImpl->moving.push_back({si, base, toWorld, toWorld});
+        const bool deforming = bool(shape.deformation);
+        if (!shape.path.empty() || deforming)
+            mImpl->moving.push_back({si, base, toWorld, toWorld, deforming});
         vertices.resize(base + mesh.positions.size());
         positions.resize(base + mesh.positions.size());
-        transformVertices(mesh, toWorld, vertices.data() + base, positions.data() + base);
+        if (deforming) {
+            Mesh now = shape.deformation(shapeTime);
+            if (now.positions.size() != mesh.positions.size() || now.indices != mesh.indices)
+                throw UserError("scene '" + s.sourceFile + "': shape '" + shape.name +
+                                "': its deformation changes the mesh topology");
+            transformVertices(now, toWorld, vertices.data() + base, positions.data() + base);
+        } else {
+            transformVertices(mesh, toWorld, vertices.data() + base, positions.data() + base);
+        }
         for (size_t v = base; v < positions.size(); ++v) {
             lo = glm::min(lo, positions[v]);
             hi = glm::max(hi, positions[v]);
@@ -192,6 +203,16 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
             glm::vec3 pad = 0.05f * (mhi - mlo);
             lo = glm::min(lo, mlo - pad);
             hi = glm::max(hi, mhi + pad);
+        }
+        if (deforming) {  // its motion is not known ahead: a margin around frame 0's extent
+            glm::vec3 slo(1e30f), shi(-1e30f);
+            for (size_t v = base; v < positions.size(); ++v) {
+                slo = glm::min(slo, positions[v]);
+                shi = glm::max(shi, positions[v]);
+            }
+            glm::vec3 pad(0.1f * glm::length(shi - slo));
+            lo = glm::min(lo, slo - pad);
+            hi = glm::max(hi, shi + pad);
         }
         for (const auto& tri : mesh.indices) {
             triangles.push_back(glm::uvec4(tri + base, uint32_t(si)));
@@ -418,12 +439,14 @@ CameraPoseGpu poseAt(const Camera& base, float time, uint32_t width, uint32_t he
 
 void SceneGpu::updateShapes(float time, bool firstFrame) {
     auto& g = *mImpl;
+    const auto start = std::chrono::steady_clock::now();
     if (g.moving.empty()) return;  // static scene: nothing to do, ever
     std::vector<glm::mat4> now(g.moving.size());
     bool moved = false;
     for (size_t i = 0; i < g.moving.size(); ++i) {
         now[i] = shapeToWorldAt(mScene.shapes[g.moving[i].shape], time);
-        moved = moved || now[i] != g.moving[i].now;
+        moved =
+            moved || now[i] != g.moving[i].now || (g.moving[i].deforming && time != g.shapeTime);
     }
     g.shapeTime = time;
     if (!moved) {  // nothing moved since the last frame time: it is also the previous frame
@@ -439,7 +462,18 @@ void SceneGpu::updateShapes(float time, bool firstFrame) {
         mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
                           (vertexCount + m.firstVertex) * sizeof(VertexGpu));
         m.prev = firstFrame ? now[i] : m.now;
-        if (now[i] != m.now) {
+        if (m.deforming) {
+            // Re-tessellated at this time; the motion map stays the rigid part (a deforming
+            // surface has no affine previous-frame map).
+            Mesh deformed = mScene.shapes[m.shape].deformation(time);
+            if (deformed.positions.size() != mesh.positions.size())
+                throw UserError("shape '" + mScene.shapes[m.shape].name +
+                                "': its deformation changes the vertex count");
+            transformVertices(deformed, now[i], g.cpuVertices.data() + m.firstVertex,
+                              g.cpuPositions.data() + m.firstVertex);
+            mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
+                              m.firstVertex * sizeof(VertexGpu));
+        } else if (now[i] != m.now) {
             transformVertices(mesh, now[i], g.cpuVertices.data() + m.firstVertex,
                               g.cpuPositions.data() + m.firstVertex);
             mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
@@ -458,6 +492,10 @@ void SceneGpu::updateShapes(float time, bool firstFrame) {
                                                    g.bvh.previousTriangleBase, 0u);
     g.lastBuild = std::move(build);
     mStats.bvhNodes = g.lastBuild.stats.nodes;
+    mStats.bvhBuildMs = g.lastBuild.stats.buildMs;
+    mStats.adjacencyMs = g.lastBuild.stats.adjacencyMs;
+    mStats.updateMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 void SceneGpu::uploadMotionRows() {

@@ -15,6 +15,9 @@ struct SceneStats {
            emissiveTriangles = 0;
     size_t bvhNodes = 0;
     double buildMs = 0.0;
+    // The last per-frame update of moving and deforming shapes: all of it (re-tessellation,
+    // uploads, BVH), the BVH build, and the triangle adjacency within it.
+    double updateMs = 0.0, bvhBuildMs = 0.0, adjacencyMs = 0.0;
 };
 
 class SceneGpu {

@@ -242,6 +242,7 @@ struct HeightFormula::Node {
         VarX,
         VarY,
         VarR,
+        VarT,
         Add,
         Sub,
         Mul,
@@ -256,7 +257,7 @@ struct HeightFormula::Node {
     float (*fn2)(float, float) = nullptr;
     std::shared_ptr<const Node> a, b;
 
-    float eval(float x, float y) const {
+    float eval(float x, float y, float t) const {
         switch (kind) {
             case Number:
                 return value;
@@ -266,22 +267,24 @@ struct HeightFormula::Node {
                 return y;
             case VarR:
                 return std::sqrt(x * x + y * y);
+            case VarT:
+                return t;
             case Add:
-                return a->eval(x, y) + b->eval(x, y);
+                return a->eval(x, y, t) + b->eval(x, y, t);
             case Sub:
-                return a->eval(x, y) - b->eval(x, y);
+                return a->eval(x, y, t) - b->eval(x, y, t);
             case Mul:
-                return a->eval(x, y) * b->eval(x, y);
+                return a->eval(x, y, t) * b->eval(x, y, t);
             case Div:
-                return a->eval(x, y) / b->eval(x, y);
+                return a->eval(x, y, t) / b->eval(x, y, t);
             case Pow:
-                return std::pow(a->eval(x, y), b->eval(x, y));
+                return std::pow(a->eval(x, y, t), b->eval(x, y, t));
             case Neg:
-                return -a->eval(x, y);
+                return -a->eval(x, y, t);
             case Call1:
-                return fn1(a->eval(x, y));
+                return fn1(a->eval(x, y, t));
             case Call2:
-                return fn2(a->eval(x, y), b->eval(x, y));
+                return fn2(a->eval(x, y, t), b->eval(x, y, t));
         }
         return 0.0f;
     }
@@ -305,11 +308,13 @@ public:
         if (mPos < mText.size()) fail(fmt::format("unexpected '{}'", mText[mPos]));
         return n;
     }
+    bool usesTime() const { return mUsesTime; }
 
 private:
     const std::string& mText;
     const std::string& mContext;
     size_t mPos = 0;
+    bool mUsesTime = false;
 
     [[noreturn]] void fail(const std::string& what) const {
         throw UserError(fmt::format("{}: height formula error at column {}: {} in \"{}\"", mContext,
@@ -394,7 +399,10 @@ private:
                 n->kind = HeightFormula::Node::VarY;
             else if (name == "r")
                 n->kind = HeightFormula::Node::VarR;
-            else if (name == "pi")
+            else if (name == "t") {
+                n->kind = HeightFormula::Node::VarT;
+                mUsesTime = true;
+            } else if (name == "pi")
                 n->value = kPi;
             else
                 return call(name, start);
@@ -454,12 +462,14 @@ private:
 
 HeightFormula HeightFormula::parse(const std::string& text, const std::string& context) {
     HeightFormula f;
-    f.mRoot = FormulaParser(text, context).parse();
+    FormulaParser parser(text, context);
+    f.mRoot = parser.parse();
+    f.mUsesTime = parser.usesTime();
     return f;
 }
 
-float HeightFormula::operator()(float x, float y) const {
-    return mRoot ? mRoot->eval(x, y) : 0.0f;
+float HeightFormula::operator()(float x, float y, float t) const {
+    return mRoot ? mRoot->eval(x, y, t) : 0.0f;
 }
 
 // ------------------------------------------------------------------------------------------

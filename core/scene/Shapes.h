@@ -39,18 +39,21 @@ Mesh makeGrass(const GrassParams& params);
 glm::mat4 cylinderTransform(const glm::vec3& p0, const glm::vec3& p1, float radius);
 
 // Height formula for heightfields: + - * / ^, parentheses, numbers, variables x, y, r
-// (= sqrt(x^2+y^2)) and pi, functions sin cos tan asin acos atan exp log sqrt abs floor fract
+// (= sqrt(x^2+y^2)), t (frame time: a formula with t animates the surface) and pi, functions sin cos tan asin acos atan exp log sqrt abs floor fract
 // (1 arg), min max pow atan2 (2 args), noise(x, y) (deterministic gradient noise in [-1, 1]).
 class HeightFormula {
 public:
     // Throws UserError "<context>: formula error at column N: ..." on a syntax error.
     static HeightFormula parse(const std::string& text, const std::string& context);
-    float operator()(float x, float y) const;
+    float operator()(float x, float y, float t = 0.0f) const;
+    // Whether the formula reads t (an animated heightfield, re-tessellated every frame).
+    bool usesTime() const { return mUsesTime; }
 
     struct Node;
 
 private:
     std::shared_ptr<const Node> mRoot;
+    bool mUsesTime = false;
 };
 
 // Area-weighted smooth vertex normals (replaces existing ones).

@@ -19,6 +19,17 @@ inline void reflectManifoldWalk(PassReflection& r) {
         .doc("two solutions are one when their first directions d satisfy |d.d' - 1| < this");
 }
 
+// The path tracer that runs beside a caustic estimator, without the paths the estimator covers
+// (manifold/coverage.glsl).
+inline void reflectCoveredPathTracer(PassReflection& r) {
+    r.param("maxBounces", 9).range(0, 64).doc("path tracer: scattering events per path");
+    r.param("rrDepth", 5).range(1, 64).doc("path tracer: Russian roulette after this many bounces");
+    r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
+        .doc("path tracer: NEE/BSDF MIS");
+    r.param("excludeCovered", true)
+        .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
+}
+
 // The chain, the generalized geometric term's clamp, the path tracer without the covered paths,
 // and how far one frame's walks may run (trialDispatches: the pass's default).
 inline void reflectCausticPath(PassReflection& r, int trialDispatches) {
@@ -28,12 +39,7 @@ inline void reflectCausticPath(PassReflection& r, int trialDispatches) {
     r.param("geometricTermClamp", 0.0)
         .min(0)
         .doc("clamp of the generalized geometric term (0 = off; biased)");
-    r.param("maxBounces", 9).range(0, 64).doc("path tracer: scattering events per path");
-    r.param("rrDepth", 5).range(1, 64).doc("path tracer: Russian roulette after this many bounces");
-    r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
-        .doc("path tracer: NEE/BSDF MIS");
-    r.param("excludeCovered", true)
-        .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
+    reflectCoveredPathTracer(r);
     r.param("trialDispatches", trialDispatches)
         .range(1, 100000)
         .doc("dispatches per frame the walks may span; unfinished estimates count as capped");

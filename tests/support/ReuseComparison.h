@@ -18,13 +18,10 @@
 #include "core/graph/Renderer.h"
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
+#include "tests/support/KernelColumns.h"
 #include "tests/support/RegionStats.h"
 
 namespace loom::test {
-
-inline std::string sourcePath(const std::string& rel) {
-    return std::string(LOOM_SOURCE_DIR) + "/" + rel;
-}
 
 // graphs/<file>, parameters overridden ("pass.param": value).
 inline std::unique_ptr<RenderGraph> loadGraph(const std::string& file, const json& overrides = {}) {

@@ -16,6 +16,7 @@
 #include "core/image/Image.h"
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
+#include "tests/support/KernelColumns.h"
 #include "tests/support/RegionStats.h"
 #include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
@@ -23,15 +24,9 @@
 namespace loom {
 namespace {
 
-std::string sourcePath(const std::string& rel) {
-    return std::string(LOOM_SOURCE_DIR) + "/" + rel;
-}
-
-scene::Scene sceneFromJson(const std::string& text, const test::TempDir& dir,
-                           const std::string& name = "scene.json") {
-    std::ofstream(dir / name) << text;
-    return scene::loadScene(dir / name);
-}
+using test::runColumns;
+using test::sceneFromJson;
+using test::sourcePath;
 
 // A mirror (perfect conductor, facing down) at y = 2 over a diffuse floor, point light below it.
 const char* kMirrorScene = R"({
@@ -67,45 +62,6 @@ struct WalkResult {
 constexpr int kConverged = 3;
 
 // Runs a test kernel over columns: column i reads rows in[i][0..], writes outRows rows.
-std::vector<std::vector<glm::vec4>> runColumns(const scene::Scene& scene, const std::string& shader,
-                                               const std::vector<std::vector<glm::vec4>>& in,
-                                               uint32_t outRows) {
-    test::TempDir dir("loom-sms-kernel");
-    // The output has the input's size: enough rows for both.
-    uint32_t n = uint32_t(in.size()), rows = outRows;
-    for (const auto& c : in) rows = std::max(rows, uint32_t(c.size()));
-    ImageData img;
-    img.width = n;
-    img.height = rows;
-    img.channels = 4;
-    img.pixels.assign(size_t(n) * rows * 4, 0.0f);
-    for (uint32_t i = 0; i < n; ++i)
-        for (uint32_t row = 0; row < in[i].size(); ++row)
-            for (int c = 0; c < 4; ++c) img.pixels[(size_t(row) * n + i) * 4 + c] = in[i][row][c];
-    writeImage(dir / "in.exr", img);
-    json g = {{"passes",
-               {{{"name", "in"}, {"type", "ImageLoader"}, {"params", {{"path", "in.exr"}}}},
-                {{"name", "k"},
-                 {"type", "ComputePass"},
-                 {"params",
-                  {{"shader", sourcePath(shader)},
-                   {"inputs", {{"input", {{"glsl", "inputImage"}, {"format", "rgba32f"}}}}},
-                   {"outputs", {{"output", {{"glsl", "outputImage"}}}}}}}}}},
-              {"edges", json::array({json::array({"in.output", "k.input"})})},
-              {"outputs", {"k.output"}}};
-    Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), dir / "graph.json"), n, rows);
-    r.setScene(scene);
-    r.frame();
-    ImageData out = r.readOutput("k.output");
-    std::vector<std::vector<glm::vec4>> res(n, std::vector<glm::vec4>(outRows));
-    for (uint32_t i = 0; i < n; ++i)
-        for (uint32_t row = 0; row < outRows; ++row) {
-            const float* p = &out.pixels[(size_t(row) * n + i) * out.channels];
-            res[i][row] = glm::vec4(p[0], p[1], p[2], p[3]);
-        }
-    return res;
-}
-
 std::vector<WalkResult> runWalks(const scene::Scene& scene, const std::vector<WalkInput>& in) {
     std::vector<std::vector<glm::vec4>> cols;
     for (const auto& w : in)

@@ -20,7 +20,8 @@ struct PathSettings {
     bool mis;              // weigh NEE against BSDF-sampled emitter hits (else hits count 0
                            // when nee, 1 without it)
     uint covered_max_chain;  // > 0: drop the paths SMS covers, chains up to this length...
-    uint covered_depth;      // ...from a receiver at this path depth
+    uint covered_depth;      // ...from the first vertex with a smooth lobe, a receiver at
+                             // most this deep (0: the primary hit; coverage.glsl)
 };
 
 struct PathRadiance {

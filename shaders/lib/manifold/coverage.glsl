@@ -5,7 +5,9 @@
 // depth 1, which also loses caustics seen from non-receivers.
 //
 // A covered path, from the camera: a receiver vertex x0 (tagged caustic_receiver, not a
-// caster, with a diffuse or glossy lobe) at the depth SMS runs at, then 1..maxChain specular
+// caster, with a diffuse or glossy lobe) that is the camera path's first vertex with a smooth
+// lobe, at most receiver_depth deep (0: the primary hit; 1: seen through one purely specular
+// surface, e.g. a pool floor under water), then 1..maxChain specular
 // vertices that the walk models (on casters or bouncers, at least one a caster; refraction
 // through smooth dielectrics, reflection off smooth conductors), then an emitter tagged
 // caustic_emitter, reached directly by the last segment.
@@ -45,6 +47,7 @@ struct ManifoldCoverage {
     uint chain_length;  // specular chain vertices since the receiver
     bool open;          // the path so far is receiver (+ chain): still a covered prefix
     bool caster;        // the chain has a caster vertex
+    bool prefix;        // every vertex so far was purely specular (no smooth lobe)
 };
 
 ManifoldCoverage manifold_coverage_none() {
@@ -52,18 +55,24 @@ ManifoldCoverage manifold_coverage_none() {
     c.chain_length = 0u;
     c.open = false;
     c.caster = false;
+    c.prefix = true;
     return c;
 }
 
 // At a path vertex sh (path depth `depth`) that scatters with sample flags `sample_flags`:
-// opens the chain at a receiver of depth receiver_depth, extends or closes it elsewhere.
+// opens the chain at the receiver (the first vertex with a smooth lobe, if it is a receiver
+// at most receiver_depth deep), extends or closes it elsewhere.
 ManifoldCoverage manifold_coverage_step(ManifoldCoverage c, ShadingPoint sh, uint depth,
                                         uint receiver_depth, uint max_chain, uint sample_flags) {
     if (max_chain == 0u) return manifold_coverage_none();
-    if (depth == receiver_depth) {
+    if (c.prefix) {
+        bool smooth_lobe = (bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
+        if (!smooth_lobe) return c;  // still the camera's specular prefix
+        c.prefix = false;
         // SMS evaluates the receiver's smooth lobes only: a delta lobe (a plastic's coat)
         // leaving it starts no covered path.
-        c.open = manifold_receiver(sh.shape_flags, sh.mat) && (sample_flags & BSDF_DELTA) == 0u;
+        c.open = depth <= receiver_depth && manifold_receiver(sh.shape_flags, sh.mat) &&
+                 (sample_flags & BSDF_DELTA) == 0u;
         c.chain_length = 0u;
         c.caster = false;
         return c;
