@@ -40,14 +40,16 @@ inline double gammaQ(double a, double x) {
 }
 
 // Per-test significance after a Sidak correction over `tests` tests at overall level 0.01.
-inline double sidak(int tests) { return 1.0 - std::pow(1.0 - 0.01, 1.0 / tests); }
+inline double sidak(int tests) {
+    return 1.0 - std::pow(1.0 - 0.01, 1.0 / tests);
+}
 
 struct Chi2Result {
     double statistic = 0.0;
     int dof = 0;
     double pValue = 0.0;
-    double stray = 0.0;      // samples in cells of expected frequency 0 (total)
-    double maxStray = 0.0;   // ... in the worst such cell
+    double stray = 0.0;     // samples in cells of expected frequency 0 (total)
+    double maxStray = 0.0;  // ... in the worst such cell
 };
 
 inline Chi2Result chi2(const std::vector<double>& observed, const std::vector<double>& expected) {

@@ -61,6 +61,24 @@ inline ImageData toLuminance(const ImageData& img) {
     return out;
 }
 
+// Frames of the graph's `ports`, luminance: each frame is an independent estimate.
+inline std::vector<RegionStats> frameStats(std::unique_ptr<RenderGraph> graph,
+                                           const scene::Scene& scene,
+                                           const std::vector<std::string>& ports, int frames,
+                                           int regions, uint32_t size, uint32_t seed) {
+    Renderer r(gpuContext(), std::move(graph), size, size, 1);
+    r.setScene(scene);
+    r.setSeed(seed);
+    std::vector<RegionStats> stats(ports.size(), RegionStats(regions));
+    for (int f = 0; f < frames; ++f) {
+        r.frame();
+        for (size_t p = 0; p < ports.size(); ++p) {
+            stats[p].add(toLuminance(r.readOutput(ports[p])));
+        }
+    }
+    return stats;
+}
+
 // `sequences` independent runs of `frames` frames each (frame f at time t0 + f * dt); each
 // run's mean image is one sample of the returned statistics (coarse, fine regions).
 constexpr int kCoarseRegions = 2;

@@ -26,24 +26,6 @@ std::string sourcePath(const std::string& rel) {
     return std::string(LOOM_SOURCE_DIR) + "/" + rel;
 }
 
-// Frames of the graph's `ports`, luminance: each frame is an independent estimate.
-std::vector<test::RegionStats> frameStats(std::unique_ptr<RenderGraph> graph,
-                                          const scene::Scene& scene,
-                                          const std::vector<std::string>& ports, int frames,
-                                          int regions, uint32_t size, uint32_t seed) {
-    Renderer r(test::gpuContext(), std::move(graph), size, size, 1);
-    r.setScene(scene);
-    r.setSeed(seed);
-    std::vector<test::RegionStats> stats(ports.size(), test::RegionStats(regions));
-    for (int f = 0; f < frames; ++f) {
-        r.frame();
-        for (size_t p = 0; p < ports.size(); ++p) {
-            stats[p].add(test::toLuminance(r.readOutput(ports[p])));
-        }
-    }
-    return stats;
-}
-
 void printRegions(const char* what, const test::RegionStats& a, const test::RegionStats& b) {
     for (int i = 0; i < a.regions * a.regions; ++i)
         std::printf("%s region %d: %.5f +- %.5f vs %.5f +- %.5f\n", what, i, a.mean(i * 3),
@@ -68,15 +50,15 @@ Agreement compare(const std::string& sceneFile, const std::string& graphFile, co
     json o = {{"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}};
     if (graphFile == "psms.json") o["prior.presamples"] = 1024;
     for (auto& [k, v] : overrides.items()) o[k] = v;
-    auto psms = frameStats(test::loadGraph(graphFile, o), scene, {"psms.color", "psms.caustic"},
-                           frames, 2, kSize, 11);
+    auto psms = test::frameStats(test::loadGraph(graphFile, o), scene,
+                                 {"psms.color", "psms.caustic"}, frames, 2, kSize, 11);
     // The references depend on the scene only: rendered once per scene.
     static std::map<std::string, std::pair<test::RegionStats, test::RegionStats>> references;
     auto ref = references.find(sceneFile);
     if (ref == references.end()) {
-        auto pt = frameStats(test::ptGraph(32, 9), scene, {"pt.color"}, 64, 2, kSize, 23);
-        auto sms =
-            frameStats(test::loadGraph("sms.json"), scene, {"sms.caustic"}, 128, 2, kSize, 29);
+        auto pt = test::frameStats(test::ptGraph(32, 9), scene, {"pt.color"}, 64, 2, kSize, 23);
+        auto sms = test::frameStats(test::loadGraph("sms.json"), scene, {"sms.caustic"}, 128, 2,
+                                    kSize, 29);
         ref = references.emplace(sceneFile, std::make_pair(pt[0], sms[0])).first;
     }
     const auto& [pt, sms] = ref->second;

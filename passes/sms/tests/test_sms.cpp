@@ -17,6 +17,7 @@
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
 #include "tests/support/KernelColumns.h"
+#include "tests/support/PoolCaustic.h"
 #include "tests/support/RegionStats.h"
 #include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
@@ -196,40 +197,9 @@ TEST(SpecularManifoldWalk, MirrorSphereConvergesToTheReflectionPoint) {
                 converged, worst);
 }
 
-// Unpolarised dielectric Fresnel reflectance from the rarer side, cos_i > 0, eta = n_t / n_i.
-double fresnelDielectric(double cosI, double eta) {
-    double sin2T = (1 - cosI * cosI) / (eta * eta);
-    if (sin2T >= 1) return 1;
-    double cosT = std::sqrt(1 - sin2T);
-    double rs = (cosI - eta * cosT) / (cosI + eta * cosT),
-           rp = (eta * cosI - cosT) / (eta * cosI + cosT);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
-// A pool: floor (albedo 0.5) at y = 0 under a flat water surface (IOR 1.33) at y = 1, seen by
-// a camera under water; a light above. The caustic on the floor in closed form:
-//  - directional light of irradiance E from polar angle theta: the beam stays parallel, so
-//    E_floor = E cos(theta) (1 - F(theta)), the same everywhere;
-//  - point light of intensity I at height 1 above the surface: rho(theta_a) = tan theta_a +
-//    tan theta_w (sin theta_a = 1.33 sin theta_w) maps the emission angle to the floor radius,
-//    so E_floor = I (1 - F) sin theta_a / (rho d rho / d theta_a).
-// Flux crosses the surface without the radiance's 1/eta^2: a radiance throughput here reads
-// 1.33^2 = 1.77 times too bright.
-std::string poolScene(const std::string& light) {
-    return R"({
-      "loom_scene": 1,
-      "camera": {"origin": [0, 0.6, 1.0], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
-      "materials": {"water": {"type": "dielectric", "ior": 1.33},
-                    "floor": {"type": "diffuse", "reflectance": 0.5}},
-      "shapes": [
-        {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
-         "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
-        {"name": "water", "type": "rectangle", "material": "water", "caustic_caster": true,
-         "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, 1, 0]}]}],
-      "lights": [)" +
-           light + R"(]
-    })";
-}
+using test::fresnelDielectric;
+using test::poolPointCaustic;
+using test::poolScene;
 
 // Half-vector walks refracting out of the denser side do not converge yet (issue 15 note).
 constexpr bool kHalfVectorFromInside = false;
@@ -280,58 +250,12 @@ TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
     std::printf("flat interface: %d of %zu walks converged\n", converged, in.size());
 }
 
-double poolPointCaustic(glm::dvec3 x, glm::dvec3 light) {
-    double D = std::hypot(x.x - light.x, x.z - light.z);
-    auto rho = [](double ta) { return std::tan(ta) + std::tan(std::asin(std::sin(ta) / 1.33)); };
-    double lo = 0, hi = 1.5;
-    for (int i = 0; i < 200; ++i) {
-        double m = 0.5 * (lo + hi);
-        (rho(m) > D ? hi : lo) = m;
-    }
-    double ta = 0.5 * (lo + hi), h = 1e-6;
-    double drho = (rho(ta + h) - rho(ta - h)) / (2 * h);
-    double E = (1 - fresnelDielectric(std::cos(ta), 1.33)) * std::sin(ta) / (D * drho);
-    return 0.5 / M_PI * E;
-}
-
-// SMS caustic means over the image against the closed form at the GBuffer's pixel centres.
-std::pair<test::RegionStats, double> poolCaustic(
-    const std::string& light, const std::function<double(glm::dvec3)>& closedForm, int frames) {
-    test::TempDir dir("loom-sms-pool");
-    auto scene = sceneFromJson(poolScene(light), dir);
-    json g = {
-        {"passes",
-         {{{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}},
-          {{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
-        {"edges", json::array()},
-        {"outputs", {"sms.caustic", "gbuf.position"}}};
-    constexpr uint32_t kSize = 16;
-    Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), "<test>"), kSize, kSize, 1);
-    r.setScene(scene);
-    test::RegionStats stats(1);
-    double analytic = 0;
-    for (int f = 0; f < frames; ++f) {
-        r.frame();
-        if (f == 0) {
-            ImageData pos = r.readOutput("gbuf.position");
-            for (uint32_t y = 0; y < kSize; ++y)
-                for (uint32_t x = 0; x < kSize; ++x) {
-                    glm::dvec3 p(pos.at(x, y, 0), pos.at(x, y, 1), pos.at(x, y, 2));
-                    // The floor only (the camera sees nothing else; kept as a guard).
-                    if (pos.at(x, y, 3) > 0 && std::abs(p.y) < 1e-3)
-                        analytic += closedForm(p) / double(kSize * kSize);
-                }
-        }
-        stats.add(r.readOutput("sms.caustic"));
-    }
-    return {stats, analytic};
-}
-
 TEST(SpecularManifoldSampling, PoolUnderDirectionalLightMatchesClosedForm) {
     // Direction towards the light (0.3, 1, 0.2) normalised: cos theta = 1 / |(0.3, 1, 0.2)|.
     double len = std::sqrt(0.09 + 1 + 0.04), cosT = 1 / len;
     double expect = 0.5 / M_PI * 2.0 * cosT * (1 - fresnelDielectric(cosT, 1.33));
-    auto [stats, analytic] = poolCaustic(
+    auto [stats, analytic] = test::poolCaustic(
+        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}},
         R"({"type": "directional", "direction": [-0.3, -1, -0.2], "irradiance": 2, "caustic_emitter": true})",
         [&](glm::dvec3) { return expect; }, 32);
     double se = std::sqrt(stats.stderr2(0));
@@ -342,7 +266,8 @@ TEST(SpecularManifoldSampling, PoolUnderDirectionalLightMatchesClosedForm) {
 
 TEST(SpecularManifoldSampling, PoolUnderPointLightMatchesClosedForm) {
     glm::dvec3 light(0.2, 2, -0.3);
-    auto [stats, analytic] = poolCaustic(
+    auto [stats, analytic] = test::poolCaustic(
+        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}},
         R"({"type": "point", "position": [0.2, 2, -0.3], "intensity": 1, "caustic_emitter": true})",
         [&](glm::dvec3 x) { return poolPointCaustic(x, light); }, 16);
     double se = std::sqrt(stats.stderr2(0));
@@ -653,22 +578,6 @@ TEST(SpecularManifoldSampling, TrialCapDropsOrKeepsAsDeclared) {
         << 0.4375 * keep.analytic;
 }
 
-// Frames of `port` from a graph on a scene: each frame is an independent estimate (new
-// frame index, no history), so their spread gives the standard errors.
-test::RegionStats frameStats(std::unique_ptr<RenderGraph> graph, const scene::Scene& scene,
-                             const std::string& port, int frames, int regions, uint32_t size,
-                             uint32_t seed) {
-    Renderer r(test::gpuContext(), std::move(graph), size, size, 1);
-    r.setScene(scene);
-    r.setSeed(seed);
-    test::RegionStats stats(regions);
-    for (int f = 0; f < frames; ++f) {
-        r.frame();
-        stats.add(test::toLuminance(r.readOutput(port)));
-    }
-    return stats;
-}
-
 struct UnbiasedCheck {
     double z;        // worst |z| over the regions
     double sms, pt;  // the means there
@@ -679,9 +588,10 @@ struct UnbiasedCheck {
 UnbiasedCheck compareWithPathTracer(const scene::Scene& scene, const json& overrides, int smsFrames,
                                     int ptFrames, int ptSpp, int regions) {
     constexpr uint32_t kSize = 32;
-    auto sms = frameStats(test::loadGraph("sms.json", overrides), scene, "sms.color", smsFrames,
-                          regions, kSize, 11);
-    auto pt = frameStats(test::ptGraph(ptSpp, 9), scene, "pt.color", ptFrames, regions, kSize, 23);
+    auto sms = test::frameStats(test::loadGraph("sms.json", overrides), scene, {"sms.color"},
+                                smsFrames, regions, kSize, 11)[0];
+    auto pt = test::frameStats(test::ptGraph(ptSpp, 9), scene, {"pt.color"}, ptFrames, regions,
+                               kSize, 23)[0];
     UnbiasedCheck c;
     c.z = test::maxZ(sms, pt, &c.sms, &c.pt);
     for (int i = 0; i < regions * regions; ++i)

@@ -297,6 +297,24 @@ bool coplanar_bisect(CoplanarTriangle tri, CoplanarArc arc, CoplanarQuery q, Cop
     return c.valid && c.towards && c.sine < 1e-3;
 }
 
+// The largest arc parameter in (0, tau_invalid) where the condition is still defined (no
+// total internal reflection), by bisection on validity.
+float coplanar_last_valid(CoplanarTriangle tri, CoplanarArc arc, CoplanarQuery q,
+                          CoplanarSettings cs, float tau_invalid, inout uint steps) {
+    float lo = 0.0, hi = tau_invalid;
+    for (uint i = 0u; i < cs.max_bisections; ++i) {
+        steps++;
+        float mid = 0.5 * (lo + hi);
+        bool ok;
+        vec2 x = coplanar_arc_point(tri, arc, mid, ok);
+        bool valid = ok && coplanar_condition(tri, x, q, vec3(0.0), false).valid;
+        if (valid) lo = mid;
+        else hi = mid;
+        if (hi - lo <= 1e-6 * tau_invalid) break;
+    }
+    return lo;
+}
+
 // The first exit of the arc from the triangle: edge, its parameter s on the edge, the
 // barycentrics and the arc parameter. skip_edge/skip_s: the entry crossing (not an exit).
 bool coplanar_exit(CoplanarTriangle tri, CoplanarArc arc, out uint edge, out float s_exit,
@@ -390,7 +408,24 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
             return COPLANAR_NO_ROOT;
         }
         CoplanarCondition ce = coplanar_condition(tri, x_exit, q, vec3(0.0), false);
-        if (!ce.valid) return COPLANAR_TIR;
+        if (!ce.valid) {
+            // Total internal reflection before the exit (large triangles reach grazing angles):
+            // the last point of the arc that still refracts closes the search in this
+            // direction; a root before it is still found.
+            float tau_v = coplanar_last_valid(tri, arc, q, cs, tau_exit, res.bisections);
+            bool ok;
+            vec2 xv = coplanar_arc_point(tri, arc, tau_v, ok);
+            CoplanarCondition cv = coplanar_condition(tri, xv, q, vec3(0.0), false);
+            vec2 x;
+            if (ok && cv.valid && (cv.f < 0.0) != (f_a < 0.0) &&
+                coplanar_bisect(tri, arc, q, cs, 0.0, f_a, tau_v, cv.f, res.bisections, x)) {
+                res.prim = tri.prim;
+                res.bary = x;
+                res.M = coplanar_position(tri, x);
+                return COPLANAR_SOLVED;
+            }
+            return COPLANAR_TIR;
+        }
         if ((ce.f < 0.0) != (f_a < 0.0)) {
             vec2 x;
             if (coplanar_bisect(tri, arc, q, cs, 0.0, f_a, tau_exit, ce.f, res.bisections, x)) {
