@@ -2,7 +2,8 @@
 # Everything worth timing on a GPU device, in one bounded call: every family's graph at
 # 1920x1080 (GPU ms per pass, wall ms per frame, Mrays/s of the passes that count rays), the
 # PT vs ReSTIR PT equal-time relMSE comparison of bench/restir_equal_time.sh, and BVH traversal
-# throughput, on the device `loom devices` lists first. Reservoir splatting (splat, splat +
+# throughput, and the animated pool of MNEE with dimension reduction at 960x720, on the device
+# `loom devices` lists first. Reservoir splatting (splat, splat +
 # backup, multi-splat motion blur, Area ReSTIR beside them) runs on scenes/fine_geometry.json,
 # whose camera moves: the paper's 1920x1080 GPU setting; the Poisson solvers (L2 by 50 CG steps and
 # by 4 multigrid-CG steps, L1 by 20 x 50) on graphs/poisson_pt.json. Prints one markdown table (plus the
@@ -47,6 +48,7 @@ ajar=$(scene_of "$shared/veach-ajar/scene.xml" scenes/glossy_spheres.json)
 sphere=$(scene_of "$shared/sms-sphere/sphere_sms.xml" scenes/glass_sphere.json)
 slab=$(scene_of scenes/wavy_slab.json)
 fine=$(scene_of scenes/fine_geometry.json)  # its camera moves: temporal reuse under motion
+pool=$(scene_of scenes/water_pool_animated.json)  # MNEE with dimension reduction
 
 device_name=$("$LOOM" devices | head -1)
 echo "device suite: ${device_name} (${W}x${H}, $(date -u +%Y-%m-%dT%H:%MZ))"
@@ -65,6 +67,7 @@ configs=(
   "sms_slab|graphs/sms.json|$slab"
   "psms_slab|graphs/psms.json|$slab"
   "psms_restir_slab|graphs/psms_restir.json|$slab"
+  "mnee_dr_pool|graphs/mnee_dr.json|$pool"
   "area_restir_fine|graphs/area_restir.json|$fine"
   "splat|graphs/splat.json|$fine"
   "splat_backup|graphs/splat_backup.json|$fine"
@@ -113,6 +116,14 @@ timeout "$STEP_S" "$LOOM" render graphs/pt.json --scene "$ajar" --width "$W" --h
   --out "$OUT/bvh.png" >"$bvh_log" 2>&1 || true
 bvh=$(awk '/ rays +[0-9.]+ Mrays\/s/ {print $3; exit}' "$bvh_log")
 
+# The animated pool at the paper's 960x720 (Granizo-Hidalgo & Holzschuch 2024: under 25 ms per
+# frame on an RTX A4000): the water re-tessellated every frame, GPU ms per frame.
+pool_status=ok
+PW=$([ $smoke -eq 1 ] && echo 64 || echo 960) PH=$([ $smoke -eq 1 ] && echo 48 || echo 720)
+LOOM_DEVICE=$([ $smoke -eq 1 ] && echo "" || echo 0) timeout "$STEP_S" \
+  "$LOOM" run --quiet scripts/water_caustics.lua width="$PW" height="$PH" steps=4 frames=2 \
+  out="$OUT/water_caustics" >"$OUT/water_caustics.log" 2>&1 || pool_status="failed ($?)"
+
 # Equal-time relMSE, PT vs ReSTIR PT (the script of bench/restir_equal_time.sh).
 et_status=ok
 LOOM_DEVICE=$([ $smoke -eq 1 ] && echo "" || echo 0) timeout $((STEP_S * 4)) \
@@ -123,6 +134,9 @@ echo
 echo "$table"
 echo
 echo "BVH traversal (pt.maxBounces=1): ${bvh:--} Mrays/s"
+echo
+echo "Animated pool, MNEE with dimension reduction, ${PW}x${PH} ($pool_status):"
+grep -A8 "^step" "$OUT/water_caustics.log" || tail -n 3 "$OUT/water_caustics.log"
 echo
 echo "Equal time, PT vs ReSTIR PT ($et_status):"
 if [ -f "$OUT/equal_time/summary.csv" ]; then
@@ -135,4 +149,5 @@ fi
 echo
 echo "CSV: $frames_csv, $passes_csv, $OUT/equal_time/summary.csv"
 failed=$(grep -c ',failed' "$frames_csv" || true)
-[ "$failed" -eq 0 ] && [ "$et_status" = ok ] || { echo "device suite: $failed config(s) failed, equal time $et_status" >&2; exit 1; }
+[ "$failed" -eq 0 ] && [ "$et_status" = ok ] && [ "$pool_status" = ok ] ||
+  { echo "device suite: $failed config(s) failed, equal time $et_status, pool $pool_status" >&2; exit 1; }

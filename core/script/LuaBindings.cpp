@@ -1030,6 +1030,18 @@ int rStats(lua_State* L) {
             lua_pushnumber(L, v);
             lua_setfield(L, -2, (p->name() + "." + key).c_str());
         }
+    if (const scene::SceneGpu* s = r.scene()) {
+        // The scene's last per-frame update (moving and deforming shapes), CPU milliseconds.
+        const auto& st = s->stats();
+        const std::pair<const char*, double> values[] = {{"scene.triangles", double(st.triangles)},
+                                                         {"scene.updateMs", st.updateMs},
+                                                         {"scene.bvhBuildMs", st.bvhBuildMs},
+                                                         {"scene.adjacencyMs", st.adjacencyMs}};
+        for (auto& [key, v] : values) {
+            lua_pushnumber(L, v);
+            lua_setfield(L, -2, key);
+        }
+    }
     return 1;
 }
 

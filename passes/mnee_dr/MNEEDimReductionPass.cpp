@@ -17,7 +17,7 @@ namespace loom {
 
 namespace {
 
-// MneeDrCounters (mnee_dr.comp): walks, one per COPLANAR_* status, triangles, bisections,
+// MneeDrCounters (mnee_dr_common.glsl): walks, one per COPLANAR_* status, triangles, bisections,
 // largest BVH step count, rays.
 constexpr int kWalks = 0, kStatus = 1, kTriangles = 9, kBisections = 10, kMaxSteps = 11, kRays = 12,
               kCounters = 16;
@@ -34,10 +34,11 @@ public:
             .doc("full image: path tracer without the covered paths + caustic");
         r.outputTexture("caustic", gpu::Format::RGBA32F)
             .optional()
-            .doc("the MNEE estimate alone (caustics at primary receivers)");
+            .doc("the MNEE estimate alone (caustics at the receivers)");
         r.outputTexture("stats", gpu::Format::RGBA32F)
             .optional()
             .doc("per pixel: triangles crossed, bisection steps, solution found, walk run");
+        r.scratchTexture("path").doc("the path tracer's part");
         r.param("maxTriangles", 1000)
             .range(1, 1000000)
             .doc("triangles a walk may enter, both directions together (the paper sets none)");
@@ -62,14 +63,20 @@ public:
         ShaderDefines defines{{"HAS_STATS", ctx.has("stats") ? "1" : "0"},
                               {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"},
                               {"MANIFOLD_MAX_VERTICES", "1"}};
-        auto kernel = compileKernel(*this, ctx.shaders(), "passes/mnee_dr/mnee_dr.comp", defines);
+        auto path = compileKernel(*this, ctx.shaders(), "passes/mnee_dr/mnee_dr_path.comp");
+        auto caustic =
+            compileKernel(*this, ctx.shaders(), "passes/mnee_dr/mnee_dr_caustic.comp", defines);
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         ctx.scene().bind(b);
-        b.set("MneeDrCounters", counters).set("colorImage", ctx.texture("color"));
+        b.set("MneeDrCounters", counters)
+            .set("pathImage", ctx.scratchTexture("path"))
+            .set("colorImage", ctx.texture("color"));
         if (ctx.has("caustic")) b.set("causticImage", ctx.texture("caustic"));
         if (ctx.has("stats")) b.set("statsImage", ctx.texture("stats"));
-        KernelParams(*this, *kernel, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
+        KernelParams(*this, *path, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
+        ctx.cmd().barrier();
+        KernelParams(*this, *caustic, ctx).dispatch(ctx, b, ctx.width(), ctx.height());
     }
 
     void frameCompleted(gpu::Context& gpu) override {

@@ -27,7 +27,9 @@ inline void reflectCoveredPathTracer(PassReflection& r) {
     r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
         .doc("path tracer: NEE/BSDF MIS");
     r.param("excludeCovered", true)
-        .doc("leave the paths SMS produces out of the path tracer (false double counts them)");
+        .doc(
+            "leave the paths the caustic estimator produces out of the path tracer (false "
+            "double counts them)");
 }
 
 // The chain, the generalized geometric term's clamp, the path tracer without the covered paths,

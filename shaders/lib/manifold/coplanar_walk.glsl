@@ -469,9 +469,40 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
     return COPLANAR_CAP;
 }
 
-// The whole walk: start point by the caster-only ray P -> L, then one direction, then
-// (both_directions) the other.
-CoplanarResult coplanar_walk(CoplanarQuery q, CoplanarSettings cs) {
+// The start point: where the line PL meets a caster (BVH mask: casters only). Every point of
+// that line is on the conic (w x (M - P) = 0). Refraction separates P and L, so the segment
+// P -> L is tried first (attempt 0, the paper's start); a mirror on their side is reached by
+// the line beyond L (attempt 1, point and area lights) or behind P (attempt 2).
+struct CoplanarStartRay {
+    vec3 o, d;
+    float tmin, tmax;
+};
+
+const uint COPLANAR_START_ATTEMPTS = 3u;
+
+bool coplanar_start_ray(CoplanarQuery q, uint attempt, out CoplanarStartRay r) {
+    float eps = 1e-4 * max(1.0, max(abs(q.P.x), max(abs(q.P.y), abs(q.P.z))));
+    r.o = q.P;
+    r.d = q.w;
+    r.tmin = eps;
+    r.tmax = q.directional ? 1e30 : length(q.L - q.P) * (1.0 - 1e-4);
+    if (attempt == 1u) {
+        if (q.directional) return false;
+        r.o = q.L;
+        r.tmin = 1e-4 * max(1.0, max(abs(q.L.x), max(abs(q.L.y), abs(q.L.z))));
+        r.tmax = 1e30;
+    } else if (attempt == 2u) {
+        r.d = -q.w;
+        r.tmax = 1e30;
+    }
+    return attempt < COPLANAR_START_ATTEMPTS;
+}
+const uint COPLANAR_START_MASK = SHAPE_CAUSTIC_CASTER;
+
+// The whole walk from the start ray's result (found, hit): one direction, then
+// (both_directions) the other. Kernels trace the start ray at their one call site.
+CoplanarResult coplanar_walk_from_start(CoplanarQuery q, CoplanarSettings cs, bool found,
+                                        Hit hit) {
     CoplanarResult res;
     res.status = COPLANAR_NO_START;
     res.status_other = COPLANAR_NO_START;
@@ -480,10 +511,7 @@ CoplanarResult coplanar_walk(CoplanarQuery q, CoplanarSettings cs) {
     res.M = vec3(0.0);
     res.triangles = 0u;
     res.bisections = 0u;
-    float tmax = q.directional ? 1e30 : length(q.L - q.P) * (1.0 - 1e-4);
-    float eps = 1e-4 * max(1.0, max(abs(q.P.x), max(abs(q.P.y), abs(q.P.z))));
-    Hit hit;
-    if (!trace_closest(q.P, q.w, eps, tmax, SHAPE_CAUSTIC_CASTER, hit)) return res;
+    if (!found) return res;
     CoplanarTriangle tri = coplanar_triangle(hit.prim, q);
     vec2 t;
     if (!coplanar_tangent(tri, hit.bary, vec2(1.0, 0.0), t)) {
@@ -521,6 +549,16 @@ CoplanarResult coplanar_walk(CoplanarQuery q, CoplanarSettings cs) {
         if (second == COPLANAR_SOLVED) res.status = second;
     }
     return res;
+}
+
+// The start rays traced here and the walk (kernels that trace nothing else).
+CoplanarResult coplanar_walk(CoplanarQuery q, CoplanarSettings cs) {
+    CoplanarStartRay r;
+    Hit hit;
+    bool found = false;
+    for (uint a = 0u; !found && coplanar_start_ray(q, a, r); ++a)
+        found = trace_closest(r.o, r.d, r.tmin, r.tmax, COPLANAR_START_MASK, hit);
+    return coplanar_walk_from_start(q, cs, found, hit);
 }
 
 // Focusing factor D of Eq. 26-33 by ray differentials (Igehy 1999): the beam leaves the light
