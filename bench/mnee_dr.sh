@@ -7,7 +7,8 @@
 # writes CSVs under out/mnee_dr; never asserts. BUILD defaults to build-bench.
 #
 #   bash bench/mnee_dr.sh                                   # 960x720, n = 7 .. 1000
-#   WIDTH=96 HEIGHT=72 RESOLUTIONS=7,22 FRAMES=1 EQ_FRAMES=2 REF_FRAMES=4 TRIALS=1,4 bash bench/mnee_dr.sh
+#   WIDTH=96 HEIGHT=72 RESOLUTIONS=7,22 FRAMES=1 EQ_FRAMES=2 REF_FRAMES=4 TRIALS=1,4 \
+#     EQ_HEIGHT_SCALES=4 bash bench/mnee_dr.sh
 source "$(dirname "$0")/lib.sh"
 OUT=${OUT:-out}
 mkdir -p "$OUT/mnee_dr"
@@ -16,4 +17,5 @@ uptime
     resolutions="${RESOLUTIONS:-7,22,71,224,707,1000}" frames="${FRAMES:-3}" \
     eq_width="${EQ_WIDTH:-160}" eq_height="${EQ_HEIGHT:-120}" eq_frames="${EQ_FRAMES:-16}" \
     ref_frames="${REF_FRAMES:-256}" trials="${TRIALS:-1,2,4,8,16,32}" \
-    eq_resolution="${EQ_RESOLUTION:-128}" out="$OUT/mnee_dr"
+    eq_resolution="${EQ_RESOLUTION:-128}" eq_height_scales="${EQ_HEIGHT_SCALES:-1,4}" \
+    out="$OUT/mnee_dr"

@@ -9,7 +9,9 @@
 -- 2. Equal quality against biased SMS (paper Sec. 6: about 6x at about 20 solutions per
 --    sample, CPU): the pool from under water (SMS runs at primary receivers), frame time 0, the
 --    caustic after `frames` frames against an unbiased-SMS reference; biased SMS with M trials
---    per sample for each M; where its RMSE reaches MNEE's, the ratio of GPU ms per frame.
+--    per sample for each M; where its RMSE reaches MNEE's, the ratio of GPU ms per frame. Once
+--    per wave height scale (eq_height_scales: the scene's waves, and steeper ones where SMS's
+--    walks converge less often).
 local util = require("util")
 
 local scene = util.resolve(loom.arg("scene", "scenes/water_pool_animated.json"))
@@ -22,13 +24,18 @@ local eqFrames = loom.arg("eq_frames", 16)
 local refFrames = loom.arg("ref_frames", 256)
 local trials = loom.arg("trials", {1, 2, 4, 8, 16, 32})
 local eqResolution = loom.arg("eq_resolution", 128)
+local eqHeightScales = loom.arg("eq_height_scales", {1, 4})
 
-local function scene_with(n)
+-- The scene with the water at resolution n (2 n^2 triangles) and its waves scaled.
+local function scene_with(n, height_scale)
   local s = loom.read_json(scene)
   for _, shape in ipairs(s.shapes) do
-    if shape.type == "heightfield" then shape.resolution = n end
+    if shape.type == "heightfield" then
+      shape.resolution = n
+      shape.height_scale = height_scale or 1
+    end
   end
-  local copy = string.format("%s/scene_n%d.json", out, n)
+  local copy = string.format("%s/scene_n%d_h%s.json", out, n, tostring(height_scale or 1))
   loom.write_json(copy, s)
   return copy
 end
@@ -77,70 +84,77 @@ util.print_table({{key = "water_triangles", title = "water triangles"},
                   {key = "success", title = "walks solved", fmt = "%.3f"}}, rows)
 loom.write_csv(out .. "/tessellation.csv", rows)
 
-print(string.format("== 2. equal quality vs biased SMS, %dx%d, %d frames, from under water, n = %d",
-                    eqW, eqH, eqFrames, eqResolution))
-local eqScene = scene_with(eqResolution)
-local underwater = {origin = {0.2, 0.45, 0.85}, target = {-0.2, 0.1, -0.6}, up = {0, 1, 0}, fov = 60}
-local function caustic(graph, params, n)
-  local r = loom.renderer{graph = graph, scene = eqScene, width = eqW, height = eqH,
-                          params = params}
-  r:camera(underwater)
-  r:set_time(0)
-  local gpu = 0
-  for _ = 1, n do
-    r:frame()
-    gpu = gpu + r:timings().frame_ms
-  end
-  local img = r:image("accumCaustic.output")
-  local st = r:stats()
-  r:close()
-  return img, gpu / n, st
-end
-local ref = caustic("graphs/sms.json", {["sms.maxChain"] = 1}, refFrames)
-ref:write(out .. "/reference_caustic.exr")
-local eq = {}
-local function measure(name, graph, params, m)
-  local img, ms = caustic(graph, params, eqFrames)
-  img:write(string.format("%s/%s.exr", out, name))
-  local rmse = loom.metrics.rmse(img, ref)
-  local rr, rg, rb = ref:mean()
-  local ir, ig, ib = img:mean()
-  eq[#eq + 1] = {method = name, M = m, rmse = rmse, relmse = loom.metrics.relmse(img, ref),
-                 ms_per_frame = ms, energy = (ir + ig + ib) / (rr + rg + rb)}
-end
-measure("mnee_dr", "graphs/mnee_dr.json", {}, 1)
-for _, m in ipairs(trials) do
-  measure("biased_sms_M" .. m, "graphs/sms_biased.json",
-          {["sms.maxChain"] = 1, ["sms.biasedTrials"] = m}, m)
-end
-util.print_table({{key = "method"}, {key = "M"}, {key = "rmse", fmt = "%.5f"},
-                  {key = "relmse", fmt = "%.5f"}, {key = "energy", title = "energy vs ref",
-                  fmt = "%.4f"}, {key = "ms_per_frame", title = "GPU ms/frame", fmt = "%.1f"}}, eq)
-loom.write_csv(out .. "/equal_quality.csv", eq)
--- The smallest M whose RMSE reaches MNEE's (interpolated in log M between its neighbours).
-local dr = eq[1]
-local found = false
-for i = 2, #eq do
-  if eq[i].rmse <= dr.rmse then
-    local ms = eq[i].ms_per_frame
-    if i > 2 then
-      local a, b = eq[i - 1], eq[i]
-      local w = (a.rmse - dr.rmse) / (a.rmse - b.rmse)
-      ms = math.exp((1 - w) * math.log(a.ms_per_frame) + w * math.log(b.ms_per_frame))
+local function equal_quality(height_scale)
+  print(string.format("== 2. equal quality vs biased SMS, %dx%d, %d frames, from under water, n = %d, "
+                      .. "waves x %s", eqW, eqH, eqFrames, eqResolution, tostring(height_scale)))
+  local eqScene = scene_with(eqResolution, height_scale)
+  local tag = "h" .. tostring(height_scale)
+  local underwater = {origin = {0.2, 0.45, 0.85}, target = {-0.2, 0.1, -0.6}, up = {0, 1, 0}, fov = 60}
+  local function caustic(graph, params, n)
+    local r = loom.renderer{graph = graph, scene = eqScene, width = eqW, height = eqH,
+                            params = params}
+    r:camera(underwater)
+    r:set_time(0)
+    local gpu = 0
+    for _ = 1, n do
+      r:frame()
+      gpu = gpu + r:timings().frame_ms
     end
-    print(string.format("biased SMS reaches MNEE's RMSE %.5f at M = %d (M* ~ %.1f): %.1f vs %.1f ms "
-                        .. "per frame, MNEE with dimension reduction %.1fx faster", dr.rmse, eq[i].M,
-                        i > 2 and math.exp((1 - (eq[i - 1].rmse - dr.rmse) / (eq[i - 1].rmse -
-                        eq[i].rmse)) * math.log(eq[i - 1].M) + (eq[i - 1].rmse - dr.rmse) /
-                        (eq[i - 1].rmse - eq[i].rmse) * math.log(eq[i].M)) or eq[i].M, ms,
-                        dr.ms_per_frame, ms / dr.ms_per_frame))
-    found = true
-    break
+    local img = r:image("accumCaustic.output")
+    local st = r:stats()
+    r:close()
+    return img, gpu / n, st
+  end
+  local ref = caustic("graphs/sms.json", {["sms.maxChain"] = 1}, refFrames)
+  ref:write(string.format("%s/%s_reference_caustic.exr", out, tag))
+  local eq = {}
+  local function measure(name, graph, params, m)
+    local img, ms = caustic(graph, params, eqFrames)
+    img:write(string.format("%s/%s_%s.exr", out, tag, name))
+    local rmse = loom.metrics.rmse(img, ref)
+    local rr, rg, rb = ref:mean()
+    local ir, ig, ib = img:mean()
+    eq[#eq + 1] = {waves = height_scale, method = name, M = m, rmse = rmse, relmse = loom.metrics.relmse(img, ref),
+                   ms_per_frame = ms, energy = (ir + ig + ib) / (rr + rg + rb)}
+  end
+  -- Receivers seen directly, as SMS's (MNEE's default also lights those seen through the water
+  -- surface, which the SMS reference cannot show).
+  measure("mnee_dr", "graphs/mnee_dr.json", {["mnee.receiverDepth"] = 0}, 1)
+  for _, m in ipairs(trials) do
+    measure("biased_sms_M" .. m, "graphs/sms_biased.json",
+            {["sms.maxChain"] = 1, ["sms.biasedTrials"] = m}, m)
+  end
+  util.print_table({{key = "method"}, {key = "M"}, {key = "rmse", fmt = "%.5f"},
+                    {key = "relmse", fmt = "%.5f"}, {key = "energy", title = "energy vs ref",
+                    fmt = "%.4f"}, {key = "ms_per_frame", title = "GPU ms/frame", fmt = "%.1f"}}, eq)
+  loom.write_csv(string.format("%s/equal_quality_%s.csv", out, tag), eq)
+  -- The smallest M whose RMSE reaches MNEE's (interpolated in log M between its neighbours).
+  local dr = eq[1]
+  local found = false
+  for i = 2, #eq do
+    if eq[i].rmse <= dr.rmse then
+      local ms = eq[i].ms_per_frame
+      if i > 2 then
+        local a, b = eq[i - 1], eq[i]
+        local w = (a.rmse - dr.rmse) / (a.rmse - b.rmse)
+        ms = math.exp((1 - w) * math.log(a.ms_per_frame) + w * math.log(b.ms_per_frame))
+      end
+      print(string.format("biased SMS reaches MNEE's RMSE %.5f at M = %d (M* ~ %.1f): %.1f vs %.1f ms "
+                          .. "per frame, MNEE with dimension reduction %.1fx faster", dr.rmse, eq[i].M,
+                          i > 2 and math.exp((1 - (eq[i - 1].rmse - dr.rmse) / (eq[i - 1].rmse -
+                          eq[i].rmse)) * math.log(eq[i - 1].M) + (eq[i - 1].rmse - dr.rmse) /
+                          (eq[i - 1].rmse - eq[i].rmse) * math.log(eq[i].M)) or eq[i].M, ms,
+                          dr.ms_per_frame, ms / dr.ms_per_frame))
+      found = true
+      break
+    end
+  end
+  if not found then
+    local last = eq[#eq]
+    print(string.format("biased SMS does not reach MNEE's RMSE %.5f up to M = %d (%.5f there): at "
+                        .. "least %.1fx faster", dr.rmse, last.M, last.rmse,
+                        last.ms_per_frame / dr.ms_per_frame))
   end
 end
-if not found then
-  local last = eq[#eq]
-  print(string.format("biased SMS does not reach MNEE's RMSE %.5f up to M = %d (%.5f there): at "
-                      .. "least %.1fx faster", dr.rmse, last.M, last.rmse,
-                      last.ms_per_frame / dr.ms_per_frame))
-end
+
+for _, h in ipairs(eqHeightScales) do equal_quality(h) end

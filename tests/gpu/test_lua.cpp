@@ -806,6 +806,22 @@ TEST(LoomRun, ShardOfASlurmArrayTask) {
     EXPECT_NE(r.err.find("--phase must be run or merge"), std::string::npos) << r.err;
 }
 
+TEST(LoomRun, WaterCausticsScript) {
+    // The animated pool (its water a heightfield of the frame time) by MNEE with dimension
+    // reduction: one PNG per step, and the water moved between them.
+    TempDir tmp("loom-run");
+    auto r = runLoom("run " + script("water_caustics.lua") +
+                         " width=24 height=18 steps=3 dt=4 frames=1 resolution=24 out=wc",
+                     tmp);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* f : {"wc/frame_0000.png", "wc/frame_0001.png", "wc/frame_0002.png",
+                          "wc/water_caustics.csv", "wc/scene_n24.json"})
+        EXPECT_TRUE(fs::exists(tmp / f)) << f;
+    EXPECT_NE(r.out.find("scene update ms"), std::string::npos) << r.out;
+    ImageData a = readImage(tmp / "wc/frame_0000.png"), b = readImage(tmp / "wc/frame_0002.png");
+    EXPECT_GT(computeMetric(Metric::MSE, a, b), 1e-6);
+}
+
 TEST(LoomRun, TurntableScript) {
     TempDir tmp("loom-run");
     auto r = runLoom(

@@ -17,9 +17,9 @@
 #include "core/image/Image.h"
 #include "core/scene/Camera.h"
 #include "core/scene/SceneLoader.h"
+#include "tests/support/CausticScenes.h"
 #include "tests/support/GpuSupport.h"
 #include "tests/support/KernelColumns.h"
-#include "tests/support/PoolCaustic.h"
 #include "tests/support/RegionStats.h"
 #include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
@@ -32,10 +32,9 @@ using test::sceneFromJson;
 
 enum Status { kSolved, kNoStart, kBoundary, kCap, kTir, kDegenerate, kNoRoot };
 
-// A water surface (heightfield over [-2, 2]^2 at y = 0, `height` in object units) over a
-// diffuse floor at y = -1, a point light above; ior and the light are parameters.
-std::string waterScene(const std::string& height, int resolution, double ior,
-                       const std::string& light, const std::string& extra = "") {
+// A caster shape (`caster`: a JSON shape object of material "water", a dielectric of IOR
+// `ior`) over a diffuse floor receiver at y = -1, and `light`.
+std::string casterScene(const std::string& caster, const std::string& light, double ior = 1.33) {
     return R"({
   "loom_scene": 1,
   "camera": {"origin": [0, 0.5, 3], "target": [0, -1, 0], "up": [0, 1, 0], "fov": 50},
@@ -45,14 +44,22 @@ std::string waterScene(const std::string& height, int resolution, double ior,
   "shapes": [
     {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
      "transform": [{"scale": 3}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, -1, 0]}]},
-    {"name": "water", "type": "heightfield", "resolution": )" +
-           std::to_string(resolution) + R"(, "material": "water", "caustic_caster": true,
-     "height": ")" +
-           height + R"(" )" + extra + R"(,
-     "transform": [{"scale": 2}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]}],
+    )" + caster +
+           R"(],
   "lights": [)" +
            light + R"(]
 })";
+}
+
+// A water surface: a heightfield over [-2, 2]^2 at y = 0, `height` in object units.
+std::string waterScene(const std::string& height, int resolution, double ior,
+                       const std::string& light, const std::string& extra = "") {
+    return casterScene(
+        R"({"name": "water", "type": "heightfield", "resolution": )" + std::to_string(resolution) +
+            R"(, "material": "water", "caustic_caster": true, "height": ")" + height + R"(" )" +
+            extra +
+            R"(, "transform": [{"scale": 2}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]})",
+        light, ior);
 }
 
 const char* kPointLight =
@@ -63,6 +70,7 @@ struct WalkOut {
     glm::vec3 M;
     float D, sine;
     int statusOther;  // how the other walk direction ended
+    glm::vec2 bary;
 };
 
 struct Settings {
@@ -83,7 +91,7 @@ std::vector<WalkOut> runWalks(
     std::vector<WalkOut> res;
     for (auto& o : out)
         res.push_back({int(o[0].x), int(o[0].y), int(o[0].z), int(o[0].w), glm::vec3(o[1]), o[1].w,
-                       o[2].z, int(o[2].w)});
+                       o[2].z, int(o[2].w), glm::vec2(o[2])});
     return res;
 }
 
@@ -161,28 +169,16 @@ TEST(MNEEDimReduction, FlatInterfaceWithEtaOneGivesTheUnfoldedDistance) {
     checkFlat(1.0);
 }
 
-// Reflection (beyond the paper): a flat mirror (conductor) at y = 2 facing down over receivers
-// below it, a point light below the mirror. M is where P -> L' crosses the mirror, L' the light
-// mirrored in it, and D = (d_P + d_L)^2 (the unfolded path).
+// Reflection (beyond the paper): the flat mirror of tests/support/CausticScenes.h (a conductor
+// square [-1, 1]^2 at y = 2 facing down) over receivers below it, a point light below the
+// mirror. M is where P -> L' crosses the mirror, L' the light mirrored in it, and
+// D = (d_P + d_L)^2 (the unfolded path).
 TEST(MNEEDimReduction, FlatMirrorReflectsAtTheImageSource) {
     test::TempDir dir("loom-mnee-dr");
-    auto scene = sceneFromJson(R"J({
-  "loom_scene": 1,
-  "camera": {"origin": [0, 1.5, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
-  "materials": {"mirror": {"type": "conductor", "metal": "none"},
-                "floor": {"type": "diffuse", "reflectance": 0.5}},
-  "shapes": [
-    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
-     "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
-    {"name": "mirror", "type": "heightfield", "resolution": 12, "height": "0", "material": "mirror",
-     "caustic_caster": true,
-     "transform": [{"scale": 2}, {"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 2, 0]}]}],
-  "lights": [{"type": "point", "position": [0.3, 1, 0], "intensity": 1, "caustic_emitter": true}]
-})J",
-                               dir);
+    auto scene = sceneFromJson(test::kMirrorScene, dir);
     const glm::vec3 light(0.3f, 1.0f, 0.0f), image(0.3f, 3.0f, 0.0f);
     std::mt19937 rng(17);
-    std::uniform_real_distribution<float> u(-1.2f, 1.2f);
+    std::uniform_real_distribution<float> u(-0.8f, 0.8f);
     std::vector<glm::vec3> P, L;
     for (int i = 0; i < 64; ++i) {
         P.push_back(glm::vec3(u(rng), 0.2f * std::abs(u(rng)), u(rng)));
@@ -193,7 +189,7 @@ TEST(MNEEDimReduction, FlatMirrorReflectsAtTheImageSource) {
     for (size_t i = 0; i < P.size(); ++i) {
         float t = (2.0f - P[i].y) / (image.y - P[i].y);
         glm::vec3 expect = P[i] + t * (image - P[i]);
-        if (std::abs(expect.x) > 1.95f || std::abs(expect.z) > 1.95f) continue;
+        if (std::abs(expect.x) > 0.98f || std::abs(expect.z) > 0.98f) continue;
         // The start point is where the line PL, beyond L, meets the mirror; where that line
         // misses it (while the reflection point is on it) there is no start.
         if (res[i].status == kNoStart) {
@@ -300,6 +296,7 @@ TEST(MNEEDimReduction, AgreesWithNewtonMnee) {
     auto dr = runWalks(scene, P, L);
     auto newton = runColumns(scene, "passes/sms/tests/manifold_walk.comp", newtonCols, 8);
     int both = 0, same = 0, onlyDr = 0, onlyNewton = 0, neither = 0;
+    int firstWay[8] = {}, otherWay[8] = {};  // how the coplanar walk ended where only Newton did
     int onlyNewtonStatus[8] = {}, onlyNewtonOther[8] = {};
     for (size_t i = 0; i < P.size(); ++i) {
         bool a = dr[i].status == kSolved, b = int(newton[i][0].x) == 3;  // TRIAL_CONVERGED
@@ -310,6 +307,8 @@ TEST(MNEEDimReduction, AgreesWithNewtonMnee) {
             ++onlyDr;
         } else if (b) {
             ++onlyNewton;
+            firstWay[dr[i].status]++;
+            otherWay[dr[i].statusOther]++;
             onlyNewtonStatus[dr[i].status]++;
             onlyNewtonOther[dr[i].statusOther]++;
         } else {
@@ -320,7 +319,13 @@ TEST(MNEEDimReduction, AgreesWithNewtonMnee) {
         "[ vs Newton MNEE ] %zu queries: both %d (same point %d), only the coplanar walk "
         "%d, only Newton %d, neither %d\n",
         P.size(), both, same, onlyDr, onlyNewton, neither);
-    EXPECT_GT(both, 128);
+    std::printf(
+        "  where only Newton converged, the coplanar walk's first / other direction ended: "
+        "boundary %d / %d, cap %d / %d, total internal reflection %d / %d, degenerate %d / "
+        "%d, no start %d\n",
+        firstWay[kBoundary], otherWay[kBoundary], firstWay[kCap], otherWay[kCap], firstWay[kTir],
+        otherWay[kTir], firstWay[kDegenerate], otherWay[kDegenerate], firstWay[kNoStart]);
+    EXPECT_GE(both, 240);  // measured 256 of 256
     // A wavy surface can have several solutions; each method finds one of them.
     EXPECT_GE(same, int(0.95 * both));
 }
@@ -380,21 +385,13 @@ TEST(MNEEDimReduction, MeshEdgeCasesEndCleanly) {
     obj += "f 41 41 42\nv 0.1 0.0 0.1\nv 0.2 0.0 0.2\nv 0.3 0.0 0.3\nf 82 83 84\n";
     std::ofstream(dir / "edge.obj") << obj;
     for (const char* flip : {"false", "true"}) {
-        auto scene = sceneFromJson(R"({
-  "loom_scene": 1,
-  "camera": {"origin": [0, 0.5, 3], "target": [0, -1, 0], "up": [0, 1, 0], "fov": 50},
-  "materials": {"water": {"type": "dielectric", "ior": 1.33},
-                "floor": {"type": "diffuse", "reflectance": 0.5}},
-  "shapes": [
-    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
-     "transform": [{"scale": 3}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [0, -1, 0]}]},
-    {"name": "water", "type": "mesh", "file": "edge.obj", "material": "water",
-     "caustic_caster": true, "flip_normals": )" +
-                                       std::string(flip) + R"(}],
-  "lights": [)" + std::string(kPointLight) +
-                                       R"(]
-})",
-                                   dir, std::string("edge_") + flip + ".json");
+        auto scene = sceneFromJson(
+            casterScene(
+                R"({"name": "water", "type": "mesh", "file": "edge.obj", "material": "water",
+                            "caustic_caster": true, "flip_normals": )" +
+                    std::string(flip) + "}",
+                kPointLight),
+            dir, std::string("edge_") + flip + ".json");
         std::mt19937 rng(21);
         std::uniform_real_distribution<float> u(-1.9f, 1.9f);
         std::vector<glm::vec3> P, L;
@@ -417,6 +414,56 @@ TEST(MNEEDimReduction, MeshEdgeCasesEndCleanly) {
             flip, counts[0], counts[1], counts[2], counts[3], counts[4], counts[5], counts[6]);
         EXPECT_GT(counts[kSolved], 64);
         EXPECT_GT(counts[kBoundary], 0);
+    }
+}
+
+// The special case of a closed curve inside the start triangle: one triangle at y = 0 whose
+// vertex normals swirl, n_i ~ (0.1 - z_i, 1, x_i), with P below and L above the origin. With
+// unnormalised normals N . (w x (M - P)) = 0.1 z - (x^2 + z^2), a circle of radius 0.05
+// through the start point; the loader normalises vertex normals, which bends it a little,
+// so the check is that the solution is on the conic of the normals as stored, away from the
+// start point, without leaving the triangle. The walk must go round the closed curve inside
+// the triangle and find the root of f on it.
+TEST(MNEEDimReduction, EllipseInsideTheStartTriangle) {
+    test::TempDir dir("loom-mnee-dr");
+    const glm::vec3 V[3] = {{-0.6f, 0, -0.5f}, {0, 0, 0.6f}, {0.6f, 0, -0.5f}};
+    glm::vec3 n[3];
+    std::string obj;
+    for (int i = 0; i < 3; ++i) {
+        obj += "v " + std::to_string(V[i].x) + " 0 " + std::to_string(V[i].z) + "\n";
+        n[i] = glm::normalize(glm::vec3(0.1f - V[i].z, 1.0f, V[i].x));
+    }
+    for (int i = 0; i < 3; ++i)
+        obj += "vn " + std::to_string(n[i].x) + " " + std::to_string(n[i].y) + " " +
+               std::to_string(n[i].z) + "\n";
+    obj += "f 1//1 2//2 3//3\n";
+    std::ofstream(dir / "swirl.obj") << obj;
+    auto scene = sceneFromJson(
+        casterScene(
+            R"({"name": "swirl", "type": "mesh", "file": "swirl.obj", "material": "water", "caustic_caster": true})",
+            R"({"type": "point", "position": [0, 1, 0], "intensity": 1, "caustic_emitter": true})"),
+        dir);
+    std::vector<glm::vec3> P, L;
+    for (float h : {1.0f, 0.5f, 2.0f}) {
+        P.push_back(glm::vec3(0, -h, 0));
+        L.push_back(glm::vec3(0, 1, 0));
+    }
+    auto res = runWalks(scene, P, L);
+    for (size_t i = 0; i < res.size(); ++i) {
+        const WalkOut& r = res[i];
+        std::printf(
+            "[ swirl ] P depth %.1f: status %d, triangles %d, bisections %d, M (%.5f, %.5f, "
+            "%.5f), sine %.1e\n",
+            -P[i].y, r.status, r.triangles, r.bisections, r.M.x, r.M.y, r.M.z, r.sine);
+        ASSERT_EQ(r.status, kSolved) << "walk " << i;
+        EXPECT_EQ(r.prim, 2);       // the floor's two triangles come first
+        EXPECT_LE(r.triangles, 2);  // never left the start triangle (one or both directions)
+        glm::vec3 N = (1 - r.bary.x - r.bary.y) * n[0] + r.bary.x * n[1] + r.bary.y * n[2];
+        glm::vec3 w(0, 1, 0);
+        EXPECT_NEAR(glm::dot(N, glm::cross(w, r.M - P[i])), 0.0f, 1e-5f);
+        EXPECT_GT(glm::length(r.M), 1e-3f);  // not the start point
+        EXPECT_LT(glm::length(r.M), 0.2f);   // on the small closed curve
+        EXPECT_LT(r.sine, 1e-3f);
     }
 }
 

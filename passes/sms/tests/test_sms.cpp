@@ -15,9 +15,9 @@
 #include "core/graph/Renderer.h"
 #include "core/image/Image.h"
 #include "core/scene/SceneLoader.h"
+#include "tests/support/CausticScenes.h"
 #include "tests/support/GpuSupport.h"
 #include "tests/support/KernelColumns.h"
-#include "tests/support/PoolCaustic.h"
 #include "tests/support/RegionStats.h"
 #include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
@@ -29,19 +29,7 @@ using test::runColumns;
 using test::sceneFromJson;
 using test::sourcePath;
 
-// A mirror (perfect conductor, facing down) at y = 2 over a diffuse floor, point light below it.
-const char* kMirrorScene = R"({
-  "loom_scene": 1,
-  "camera": {"origin": [0, 1.5, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
-  "materials": {"mirror": {"type": "conductor", "metal": "none"},
-                "floor": {"type": "diffuse", "reflectance": 0.5}},
-  "shapes": [
-    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
-     "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
-    {"name": "mirror", "type": "rectangle", "material": "mirror", "caustic_caster": true,
-     "transform": [{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 2, 0]}]}],
-  "lights": [{"type": "point", "position": [0.3, 1, 0], "intensity": 1, "caustic_emitter": true}]
-})";
+using test::kMirrorScene;
 
 struct WalkInput {
     glm::vec3 x0, ng0, y, ny, seed;

@@ -297,28 +297,33 @@ bool coplanar_bisect(CoplanarTriangle tri, CoplanarArc arc, CoplanarQuery q, Cop
     return c.valid && c.towards && c.sine < 1e-3;
 }
 
-// The largest arc parameter in (0, tau_invalid) where the condition is still defined (no
-// total internal reflection), by bisection on validity.
-float coplanar_last_valid(CoplanarTriangle tri, CoplanarArc arc, CoplanarQuery q,
-                          CoplanarSettings cs, float tau_invalid, inout uint steps) {
-    float lo = 0.0, hi = tau_invalid;
-    for (uint i = 0u; i < cs.max_bisections; ++i) {
+// The arc parameter next to the boundary of total internal reflection between tau_valid
+// (the condition is defined there) and tau_invalid (it is not), on the valid side, by
+// bisection on validity.
+float coplanar_valid_boundary(CoplanarTriangle tri, CoplanarArc arc, CoplanarQuery q,
+                              CoplanarSettings cs, float tau_valid, float tau_invalid,
+                              inout uint steps) {
+    float span = abs(tau_invalid - tau_valid);
+    for (uint i = 0u; i < cs.max_bisections && abs(tau_invalid - tau_valid) > 1e-6 * span; ++i) {
         steps++;
-        float mid = 0.5 * (lo + hi);
+        float mid = 0.5 * (tau_valid + tau_invalid);
         bool ok;
         vec2 x = coplanar_arc_point(tri, arc, mid, ok);
-        bool valid = ok && coplanar_condition(tri, x, q, vec3(0.0), false).valid;
-        if (valid) lo = mid;
-        else hi = mid;
-        if (hi - lo <= 1e-6 * tau_invalid) break;
+        if (ok && coplanar_condition(tri, x, q, vec3(0.0), false).valid) tau_valid = mid;
+        else tau_invalid = mid;
     }
-    return lo;
+    return tau_valid;
 }
 
 // The first exit of the arc from the triangle: edge, its parameter s on the edge, the
-// barycentrics and the arc parameter. skip_edge/skip_s: the entry crossing (not an exit).
-bool coplanar_exit(CoplanarTriangle tri, CoplanarArc arc, out uint edge, out float s_exit,
-                   out vec2 x_exit, out float tau_exit) {
+// barycentrics and the arc parameter. entry_edge (3: none, the start triangle) and entry_s
+// say where the arc came in: of the entry edge's crossings, the one nearest entry_s is the
+// entry itself. (Its recomputed root moves with the triangle's size: F's terms are of the
+// order of |M - P| while its gradient is of the order of the triangle, so at a million
+// triangles float rounding puts it 1e-5 .. 1e-4 away in barycentrics, and a distance test
+// would take it for an exit back out.)
+bool coplanar_exit(CoplanarTriangle tri, CoplanarArc arc, uint entry_edge, float entry_s,
+                   out uint edge, out float s_exit, out vec2 x_exit, out float tau_exit) {
     tau_exit = 1e30;
     edge = 0u;
     s_exit = 0.0;
@@ -327,9 +332,13 @@ bool coplanar_exit(CoplanarTriangle tri, CoplanarArc arc, out uint edge, out flo
     for (uint k = 0u; k < 3u; ++k) {
         float s[2];
         uint n = coplanar_edge_crossings(tri, k, s[0], s[1]);
+        uint skip = 2u;
+        if (k == entry_edge && n > 0u)
+            skip = (n == 2u && abs(s[1] - entry_s) < abs(s[0] - entry_s)) ? 1u : 0u;
         for (uint i = 0u; i < n; ++i) {
+            if (i == skip) continue;
             vec2 c = coplanar_edge_point(k, s[i]);
-            if (length(c - arc.a) < 1e-5) continue;  // the entry point itself
+            if (length(c - arc.a) < 1e-5) continue;  // the start point, or a vertex
             float tau = coplanar_arc_param(arc, c);
             if (!(tau > 1e-6) || tau >= tau_exit) continue;
             tau_exit = tau;
@@ -361,13 +370,18 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
     CoplanarTriangle tri = coplanar_triangle(prim0, q);
     vec2 a = bary0, t = dir0;
     bool start = true;
+    uint entry_edge = 3u;  // none: the start point is inside
+    float entry_s = 0.0;
+    bool have_f;  // f is defined at the entry point (no total internal reflection there)
     float f_a;
     {
         // At the start point the plane (P, L, M) is undefined; along the walk it tends to the
         // plane spanned by w and the walk tangent.
         vec3 k0 = cross(q.w, coplanar_world(tri, t));
         CoplanarCondition c0 = coplanar_condition(tri, a, q, k0, true);
-        if (!c0.valid) return COPLANAR_TIR;
+        // Totally internally reflected on the line PL (P far from the light, under water):
+        // the walk crosses that region with no sign to watch until the curve refracts again.
+        have_f = c0.valid;
         f_a = c0.f;
     }
     while (res.triangles < cs.max_triangles) {
@@ -376,8 +390,9 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
         uint edge;
         float s_exit, tau_exit;
         vec2 x_exit;
-        if (!coplanar_exit(tri, arc, edge, s_exit, x_exit, tau_exit)) {
+        if (!coplanar_exit(tri, arc, entry_edge, entry_s, edge, s_exit, x_exit, tau_exit)) {
             if (!start || arc.line) return COPLANAR_DEGENERATE;
+            if (!have_f) return COPLANAR_TIR;
             // An ellipse inside the start triangle: the angle parameter goes round it back to
             // the start, where f's limit is -f_a (k flips across the line PL). Bracket the
             // first valid sign change among 8 samples.
@@ -408,11 +423,30 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
             return COPLANAR_NO_ROOT;
         }
         CoplanarCondition ce = coplanar_condition(tri, x_exit, q, vec3(0.0), false);
-        if (!ce.valid) {
+        if (!have_f && ce.valid) {
+            // The curve leaves the region of total internal reflection in this triangle: watch
+            // f's sign from the first point that refracts.
+            float tau_v = coplanar_valid_boundary(tri, arc, q, cs, tau_exit, 0.0, res.bisections);
+            bool ok;
+            vec2 xv = coplanar_arc_point(tri, arc, tau_v, ok);
+            CoplanarCondition cv = coplanar_condition(tri, xv, q, vec3(0.0), false);
+            if (!ok || !cv.valid) return COPLANAR_TIR;
+            have_f = true;
+            vec2 x;
+            if ((cv.f < 0.0) != (ce.f < 0.0) &&
+                coplanar_bisect(tri, arc, q, cs, tau_v, cv.f, tau_exit, ce.f, res.bisections, x)) {
+                res.prim = tri.prim;
+                res.bary = x;
+                res.M = coplanar_position(tri, x);
+                return COPLANAR_SOLVED;
+            }
+        } else if (!have_f) {
+            // Still totally internally reflected: on to the neighbour.
+        } else if (!ce.valid) {
             // Total internal reflection before the exit (large triangles reach grazing angles):
             // the last point of the arc that still refracts closes the search in this
             // direction; a root before it is still found.
-            float tau_v = coplanar_last_valid(tri, arc, q, cs, tau_exit, res.bisections);
+            float tau_v = coplanar_valid_boundary(tri, arc, q, cs, 0.0, tau_exit, res.bisections);
             bool ok;
             vec2 xv = coplanar_arc_point(tri, arc, tau_v, ok);
             CoplanarCondition cv = coplanar_condition(tri, xv, q, vec3(0.0), false);
@@ -425,8 +459,7 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
                 return COPLANAR_SOLVED;
             }
             return COPLANAR_TIR;
-        }
-        if ((ce.f < 0.0) != (f_a < 0.0)) {
+        } else if ((ce.f < 0.0) != (f_a < 0.0)) {
             vec2 x;
             if (coplanar_bisect(tri, arc, q, cs, 0.0, f_a, tau_exit, ce.f, res.bisections, x)) {
                 res.prim = tri.prim;
@@ -454,6 +487,8 @@ uint coplanar_walk_from(CoplanarQuery q, CoplanarSettings cs, uint prim0, vec2 b
         }
         if (entry == 3u) return COPLANAR_BOUNDARY;
         a = coplanar_edge_point(entry, s_in);
+        entry_edge = entry;
+        entry_s = s_in;
         // The tangent continues into the new triangle; where the curve runs along the edge,
         // the world tangent's orientation decides (kept across triangles).
         vec2 in_t;
@@ -535,7 +570,7 @@ CoplanarResult coplanar_walk_from_start(CoplanarQuery q, CoplanarSettings cs, bo
         float s, tau;
         vec2 xe;
         CoplanarArc arc = coplanar_arc(tri, hit.bary, t);
-        if (c0.valid && coplanar_exit(tri, arc, e, s, xe, tau)) {
+        if (c0.valid && coplanar_exit(tri, arc, 3u, 0.0, e, s, xe, tau)) {
             CoplanarCondition ce = coplanar_condition(tri, xe, q, vec3(0.0), false);
             bool change = ce.valid && (ce.f < 0.0) != (c0.f < 0.0);
             if (!change && ce.valid && abs(ce.f) > abs(c0.f)) order = -1.0;

@@ -1,6 +1,6 @@
 #pragma once
-// The flat pool with a closed-form caustic, shared by the caustic estimators' tests (SMS,
-// MNEE with dimension reduction).
+// Caustic scenes with closed forms, shared by the caustic estimators' tests (SMS, MNEE with
+// dimension reduction): a flat mirror (image source) and the flat pool.
 #include <cmath>
 #include <functional>
 #include <glm/glm.hpp>
@@ -14,6 +14,20 @@
 #include "tests/support/RegionStats.h"
 
 namespace loom::test {
+
+// A mirror (perfect conductor, facing down) at y = 2 over a diffuse floor, point light below it.
+inline const char* kMirrorScene = R"({
+  "loom_scene": 1,
+  "camera": {"origin": [0, 1.5, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
+  "materials": {"mirror": {"type": "conductor", "metal": "none"},
+                "floor": {"type": "diffuse", "reflectance": 0.5}},
+  "shapes": [
+    {"name": "floor", "type": "rectangle", "material": "floor", "caustic_receiver": true,
+     "transform": [{"scale": 4}, {"rotate": {"axis": [1, 0, 0], "angle": -90}}]},
+    {"name": "mirror", "type": "rectangle", "material": "mirror", "caustic_caster": true,
+     "transform": [{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 2, 0]}]}],
+  "lights": [{"type": "point", "position": [0.3, 1, 0], "intensity": 1, "caustic_emitter": true}]
+})";
 
 // Unpolarised dielectric Fresnel reflectance from the rarer side, cos_i > 0, eta = n_t / n_i.
 inline double fresnelDielectric(double cosI, double eta) {
