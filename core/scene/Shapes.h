@@ -39,8 +39,9 @@ Mesh makeGrass(const GrassParams& params);
 glm::mat4 cylinderTransform(const glm::vec3& p0, const glm::vec3& p1, float radius);
 
 // Height formula for heightfields: + - * / ^, parentheses, numbers, variables x, y, r
-// (= sqrt(x^2+y^2)), t (frame time: a formula with t animates the surface) and pi, functions sin cos tan asin acos atan exp log sqrt abs floor fract
-// (1 arg), min max pow atan2 (2 args), noise(x, y) (deterministic gradient noise in [-1, 1]).
+// (= sqrt(x^2+y^2)), t (the frame time: a formula with t animates the surface) and pi;
+// functions sin cos tan asin acos atan exp log sqrt abs floor fract (1 arg), min max pow atan2
+// (2 args), noise(x, y) (deterministic gradient noise in [-1, 1]).
 class HeightFormula {
 public:
     // Throws UserError "<context>: formula error at column N: ..." on a syntax error.
