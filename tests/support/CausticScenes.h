@@ -1,7 +1,10 @@
 #pragma once
 // Caustic scenes with closed forms, shared by the caustic estimators' tests (SMS, MNEE with
 // dimension reduction): a flat mirror (image source) and the flat pool.
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <glm/glm.hpp>
 #include <string>
@@ -109,6 +112,40 @@ inline std::pair<RegionStats, double> poolCaustic(
         stats.add(r.readOutput(pass["name"].get<std::string>() + ".caustic"));
     }
     return {stats, analytic};
+}
+
+// The caustic of `pass` on the flat pool against the closed forms, within 3 standard errors
+// plus the stated allowance: a directional light (irradiance 2 from (0.3, 1, 0.2), constant
+// E cos(theta) (1 - F) on the floor) and a point light (poolPointCaustic). `what` names the
+// estimator in the messages.
+inline void expectPoolDirectionalClosedForm(const json& pass, int frames, const char* what) {
+    // Direction towards the light (0.3, 1, 0.2) normalised: cos theta = 1 / |(0.3, 1, 0.2)|.
+    double len = std::sqrt(0.09 + 1 + 0.04), cosT = 1 / len;
+    double expect = 0.5 / M_PI * 2.0 * cosT * (1 - fresnelDielectric(cosT, 1.33));
+    auto [stats, analytic] = poolCaustic(
+        pass,
+        R"({"type": "directional", "direction": [-0.3, -1, -0.2], "irradiance": 2, "caustic_emitter": true})",
+        [&](glm::dvec3) { return expect; }, frames);
+    double se = std::sqrt(stats.stderr2(0));
+    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 1e-3 * analytic)
+        << what << " " << stats.mean(0) << " +- " << se << " closed form " << analytic;
+    std::printf("pool, directional (%s): %.6f +- %.6f vs %.6f\n", what, stats.mean(0), se,
+                analytic);
+}
+
+inline void expectPoolPointClosedForm(const json& pass, int frames, const char* what) {
+    glm::dvec3 light(0.2, 2, -0.3);
+    auto [stats, analytic] = poolCaustic(
+        pass,
+        R"({"type": "point", "position": [0.2, 2, -0.3], "intensity": 1, "caustic_emitter": true})",
+        [&](glm::dvec3 x) { return poolPointCaustic(x, light); }, frames);
+    double se = std::sqrt(stats.stderr2(0));
+    // Pixel-centre closed form vs the jittered estimate: the caustic is smooth (second-order
+    // difference, well below 0.5% here).
+    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 5e-3 * analytic)
+        << what << " " << stats.mean(0) << " +- " << se << " closed form " << analytic;
+    std::printf("pool, point light (%s): %.6f +- %.6f vs %.6f\n", what, stats.mean(0), se,
+                analytic);
 }
 
 }  // namespace loom::test

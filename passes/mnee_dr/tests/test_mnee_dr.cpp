@@ -487,30 +487,11 @@ TEST(MNEEDimReduction, AnimatedSurfaceIsWalkedAtTheFrameTime) {
 const json kMneeDrPass = {{"name", "mnee"}, {"type", "MNEEDimReduction"}};
 
 TEST(MNEEDimReduction, PoolUnderPointLightMatchesClosedForm) {
-    glm::dvec3 light(0.2, 2, -0.3);
-    auto [stats, analytic] = test::poolCaustic(
-        kMneeDrPass,
-        R"({"type": "point", "position": [0.2, 2, -0.3], "intensity": 1, "caustic_emitter": true})",
-        [&](glm::dvec3 x) { return test::poolPointCaustic(x, light); }, 16);
-    double se = std::sqrt(stats.stderr2(0));
-    // Pixel-centre closed form vs the jittered estimate: the caustic is smooth (second-order
-    // difference, well below 0.5% here).
-    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 5e-3 * analytic)
-        << "mnee " << stats.mean(0) << " +- " << se << " closed form " << analytic;
-    std::printf("pool, point light: %.6f +- %.6f vs %.6f\n", stats.mean(0), se, analytic);
+    test::expectPoolPointClosedForm(kMneeDrPass, 16, "mnee_dr");
 }
 
 TEST(MNEEDimReduction, PoolUnderDirectionalLightMatchesClosedForm) {
-    double len = std::sqrt(0.09 + 1 + 0.04), cosT = 1 / len;
-    double expect = 0.5 / M_PI * 2.0 * cosT * (1 - test::fresnelDielectric(cosT, 1.33));
-    auto [stats, analytic] = test::poolCaustic(
-        kMneeDrPass,
-        R"({"type": "directional", "direction": [-0.3, -1, -0.2], "irradiance": 2, "caustic_emitter": true})",
-        [&](glm::dvec3) { return expect; }, 8);
-    double se = std::sqrt(stats.stderr2(0));
-    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 1e-3 * analytic)
-        << "mnee " << stats.mean(0) << " +- " << se << " closed form " << analytic;
-    std::printf("pool, directional: %.6f +- %.6f vs %.6f\n", stats.mean(0), se, analytic);
+    test::expectPoolDirectionalClosedForm(kMneeDrPass, 8, "mnee_dr");
 }
 
 // A wavy water sheet under a small area light, seen from below (the floor is the primary

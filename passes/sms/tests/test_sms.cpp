@@ -185,8 +185,6 @@ TEST(SpecularManifoldWalk, MirrorSphereConvergesToTheReflectionPoint) {
                 converged, worst);
 }
 
-using test::fresnelDielectric;
-using test::poolPointCaustic;
 using test::poolScene;
 
 // Half-vector walks refracting out of the denser side do not converge yet (issue 15 note).
@@ -239,31 +237,15 @@ TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
 }
 
 TEST(SpecularManifoldSampling, PoolUnderDirectionalLightMatchesClosedForm) {
-    // Direction towards the light (0.3, 1, 0.2) normalised: cos theta = 1 / |(0.3, 1, 0.2)|.
-    double len = std::sqrt(0.09 + 1 + 0.04), cosT = 1 / len;
-    double expect = 0.5 / M_PI * 2.0 * cosT * (1 - fresnelDielectric(cosT, 1.33));
-    auto [stats, analytic] = test::poolCaustic(
-        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}},
-        R"({"type": "directional", "direction": [-0.3, -1, -0.2], "irradiance": 2, "caustic_emitter": true})",
-        [&](glm::dvec3) { return expect; }, 32);
-    double se = std::sqrt(stats.stderr2(0));
-    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 1e-3 * analytic)
-        << "sms " << stats.mean(0) << " +- " << se << " closed form " << analytic;
-    std::printf("pool, directional: %.6f +- %.6f vs %.6f\n", stats.mean(0), se, analytic);
+    test::expectPoolDirectionalClosedForm(
+        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}}, 32,
+        "sms");
 }
 
 TEST(SpecularManifoldSampling, PoolUnderPointLightMatchesClosedForm) {
-    glm::dvec3 light(0.2, 2, -0.3);
-    auto [stats, analytic] = test::poolCaustic(
-        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}},
-        R"({"type": "point", "position": [0.2, 2, -0.3], "intensity": 1, "caustic_emitter": true})",
-        [&](glm::dvec3 x) { return poolPointCaustic(x, light); }, 16);
-    double se = std::sqrt(stats.stderr2(0));
-    // Pixel-centre closed form vs the jittered estimate: the caustic is smooth (second-order
-    // difference, well below 0.5% here).
-    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 5e-3 * analytic)
-        << "sms " << stats.mean(0) << " +- " << se << " closed form " << analytic;
-    std::printf("pool, point light: %.6f +- %.6f vs %.6f\n", stats.mean(0), se, analytic);
+    test::expectPoolPointClosedForm(
+        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}}, 16,
+        "sms");
 }
 
 // The generalized geometric term's end-point Jacobian |det(dx1/dy)| of two-refraction chains
