@@ -29,14 +29,37 @@ inline scene::Scene sceneFromJson(const std::string& text, const TempDir& dir,
     return scene::loadScene(dir / name);
 }
 
-// Runs `shader` (relative to the source tree) over the columns `in` against `scene` at frame
-// time `time`; returns outRows vec4 rows per column.
+// Runs the test kernel `shader` (relative to the source tree; it reads inputImage and writes
+// outputImage of the same size) on `input` against `scene` at frame time `time`.
+inline ImageData runKernelImage(const scene::Scene& scene, const std::string& shader,
+                                const ImageData& input, float time = 0.0f) {
+    using nlohmann::json;
+    TempDir dir("loom-kernel-image");
+    writeImage(dir / "in.exr", input);
+    json g = {{"passes",
+               {{{"name", "in"}, {"type", "ImageLoader"}, {"params", {{"path", "in.exr"}}}},
+                {{"name", "k"},
+                 {"type", "ComputePass"},
+                 {"params",
+                  {{"shader", sourcePath(shader)},
+                   {"inputs", {{"input", {{"glsl", "inputImage"}, {"format", "rgba32f"}}}}},
+                   {"outputs", {{"output", {{"glsl", "outputImage"}}}}}}}}}},
+              {"edges", json::array({json::array({"in.output", "k.input"})})},
+              {"outputs", {"k.output"}}};
+    Renderer r(gpuContext(), RenderGraph::parse(g.dump(), dir / "graph.json"), input.width,
+               input.height);
+    r.setScene(scene);
+    r.setTime(time);
+    r.frame();
+    return r.readOutput("k.output");
+}
+
+// Runs `shader` over the columns `in` against `scene` at frame time `time` (runKernelImage);
+// returns outRows vec4 rows per column.
 inline std::vector<std::vector<glm::vec4>> runColumns(const scene::Scene& scene,
                                                       const std::string& shader,
                                                       const std::vector<std::vector<glm::vec4>>& in,
                                                       uint32_t outRows, float time = 0.0f) {
-    using nlohmann::json;
-    TempDir dir("loom-kernel-columns");
     // The output has the input's size: enough rows for both.
     uint32_t n = uint32_t(in.size()), rows = outRows;
     for (const auto& c : in) rows = std::max(rows, uint32_t(c.size()));
@@ -48,22 +71,7 @@ inline std::vector<std::vector<glm::vec4>> runColumns(const scene::Scene& scene,
     for (uint32_t i = 0; i < n; ++i)
         for (uint32_t row = 0; row < in[i].size(); ++row)
             for (int c = 0; c < 4; ++c) img.pixels[(size_t(row) * n + i) * 4 + c] = in[i][row][c];
-    writeImage(dir / "in.exr", img);
-    json g = {{"passes",
-               {{{"name", "in"}, {"type", "ImageLoader"}, {"params", {{"path", "in.exr"}}}},
-                {{"name", "k"},
-                 {"type", "ComputePass"},
-                 {"params",
-                  {{"shader", sourcePath(shader)},
-                   {"inputs", {{"input", {{"glsl", "inputImage"}, {"format", "rgba32f"}}}}},
-                   {"outputs", {{"output", {{"glsl", "outputImage"}}}}}}}}}},
-              {"edges", json::array({json::array({"in.output", "k.input"})})},
-              {"outputs", {"k.output"}}};
-    Renderer r(gpuContext(), RenderGraph::parse(g.dump(), dir / "graph.json"), n, rows);
-    r.setScene(scene);
-    r.setTime(time);
-    r.frame();
-    ImageData out = r.readOutput("k.output");
+    ImageData out = runKernelImage(scene, shader, img, time);
     std::vector<std::vector<glm::vec4>> res(n, std::vector<glm::vec4>(outRows));
     for (uint32_t i = 0; i < n; ++i)
         for (uint32_t row = 0; row < outRows; ++row) {

@@ -15,6 +15,7 @@
 #include "core/image/Image.h"
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
+#include "tests/support/KernelColumns.h"
 #include "tests/support/RegionStats.h"
 #include "tests/support/ReuseComparison.h"
 #include "tests/support/TestSupport.h"
@@ -70,28 +71,14 @@ Agreement compare(const std::string& sceneFile, const std::string& graphFile, co
 // Runs the conditional-probability test kernel on a size x size grid; config is row 0.
 std::vector<glm::vec4> runConditional(const scene::Scene& scene, uint32_t size,
                                       const std::vector<glm::vec4>& config) {
-    test::TempDir dir("loom-psms-kernel");
     ImageData img;
     img.width = img.height = size;
     img.channels = 4;
     img.pixels.assign(size_t(size) * size * 4, 0.0f);
     for (size_t i = 0; i < config.size(); ++i)
         for (int c = 0; c < 4; ++c) img.pixels[i * 4 + c] = config[i][c];
-    writeImage(dir / "in.exr", img);
-    json g = {{"passes",
-               {{{"name", "in"}, {"type", "ImageLoader"}, {"params", {{"path", "in.exr"}}}},
-                {{"name", "k"},
-                 {"type", "ComputePass"},
-                 {"params",
-                  {{"shader", sourcePath("passes/partitioned_sms/tests/psms_conditional.comp")},
-                   {"inputs", {{"input", {{"glsl", "inputImage"}, {"format", "rgba32f"}}}}},
-                   {"outputs", {{"output", {{"glsl", "outputImage"}}}}}}}}}},
-              {"edges", json::array({json::array({"in.output", "k.input"})})},
-              {"outputs", {"k.output"}}};
-    Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), dir / "graph.json"), size, size);
-    r.setScene(scene);
-    r.frame();
-    ImageData out = r.readOutput("k.output");
+    ImageData out =
+        test::runKernelImage(scene, "passes/partitioned_sms/tests/psms_conditional.comp", img);
     std::vector<glm::vec4> res(size_t(size) * size);
     for (size_t i = 0; i < res.size(); ++i)
         res[i] = glm::vec4(out.pixels[i * 4], out.pixels[i * 4 + 1], out.pixels[i * 4 + 2],
