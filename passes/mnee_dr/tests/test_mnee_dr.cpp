@@ -699,6 +699,46 @@ TEST(MNEEDimReduction, DISABLED_WaterCausticWalksAgainstNewton) {
     }
 }
 
+// Bad input: missing tags, an out-of-range parameter and an animated height formula that
+// becomes non-finite at a later frame are each one named error, not a black caustic.
+TEST(MNEEDimReduction, BadInputIsANamedError) {
+    test::TempDir dir("loom-mnee-dr-bad");
+    auto render = [&](const std::string& sceneText, const json& params, float time) {
+        auto scene = sceneFromJson(sceneText, dir);
+        json g = {
+            {"passes", {{{"name", "mnee"}, {"type", "MNEEDimReduction"}, {"params", params}}}},
+            {"edges", json::array()},
+            {"outputs", {"mnee.color"}}};
+        Renderer r(test::gpuContext(), RenderGraph::parse(g.dump(), "<test>"), 8, 8, 1);
+        r.setScene(scene);
+        r.setTime(time);
+        r.frame();
+    };
+    auto expectError = [&](const std::string& sceneText, const json& params, float time,
+                           const std::string& what) {
+        try {
+            render(sceneText, params, time);
+            FAIL() << "should fail: " << what;
+        } catch (const UserError& e) {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    std::string good = waterScene("0.05 * sin(3 * x)", 8, 1.33, kPointLight);
+    auto edit = [](std::string text, const std::string& from, const std::string& to) {
+        text.replace(text.find(from), from.size(), to);
+        return text;
+    };
+    expectError(edit(good, "\"caustic_receiver\": true,", ""), json::object(), 0,
+                "no caustic receivers");
+    expectError(edit(good, "\"caustic_caster\": true,", ""), json::object(), 0,
+                "no caustic casters");
+    expectError(edit(good, ", \"caustic_emitter\": true", ""), json::object(), 0,
+                "no caustic emitters");
+    expectError(good, {{"maxBisections", 0}}, 0, "maxBisections");
+    expectError(waterScene("0.05 * log(4 - t)", 8, 1.33, kPointLight), json::object(), 6,
+                "not finite");
+}
+
 // The comparison above sees double counting: with the covered paths left in the path part,
 // the full image is too bright.
 TEST(MNEEDimReduction, DoubleCountingIsDetected) {
