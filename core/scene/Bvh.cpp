@@ -194,8 +194,19 @@ std::vector<glm::ivec3> triangleAdjacency(const std::vector<glm::uvec3>& indices
     return adjacency;
 }
 
-BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
-                  const std::vector<uint32_t>& triMask, const BvhBuildOptions& options) {
+namespace {
+// closePositions: null for a static tree, else every vertex at shutter close (buildMotionBvh).
+BvhBuild build(const std::vector<glm::vec3>& positions,
+               const std::vector<glm::vec3>* closePositions,
+               const std::vector<glm::uvec3>& triangles, const std::vector<uint32_t>& triMask,
+               BvhBuildOptions options) {
+    if (closePositions) {
+        if (closePositions->size() != positions.size())
+            throw UserError(
+                fmt::format("buildMotionBvh: {} shutter-close positions for {} vertices",
+                            closePositions->size(), positions.size()));
+        options.spatialSplits = false;  // a split plane would clip one time only
+    }
     const auto start = std::chrono::steady_clock::now();
     if (!triMask.empty() && triMask.size() != triangles.size())
         throw UserError(fmt::format("buildBvh: {} triangle masks for {} triangles", triMask.size(),
@@ -227,6 +238,15 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
                 throw UserError(fmt::format("buildBvh: vertex {} is not finite", triangles[t][k]));
             lo = glm::min(lo, p);
             hi = glm::max(hi, p);
+            if (closePositions) {  // linear motion: the box of both ends bounds every time
+                const glm::vec3& q = (*closePositions)[triangles[t][k]];
+                if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+                    throw UserError(
+                        fmt::format("buildMotionBvh: vertex {} is not finite at shutter close",
+                                    triangles[t][k]));
+                lo = glm::min(lo, q);
+                hi = glm::max(hi, q);
+            }
         }
         sceneLo = glm::min(sceneLo, lo);
         sceneHi = glm::max(sceneHi, hi);
@@ -271,7 +291,7 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
     args.setNodeChildren = setNodeChildren;
     args.setNodeBounds = setNodeBounds;
     args.createLeaf = createLeaf;
-    args.splitPrimitive = splitPrimitive;
+    args.splitPrimitive = options.spatialSplits ? splitPrimitive : nullptr;
     args.userPtr = corners.data();
     auto* root = static_cast<BuildNode*>(rtcBuildBVH(&args));
     if (!root)
@@ -352,6 +372,17 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
                     out.triangles.push_back(BvhTriangle{v0, p, glm::vec3(e1), masks[p],
                                                         glm::vec3(e2), 0u,
                                                         glm::vec3(glm::cross(e1, e2)), 0u});
+                    if (closePositions) {
+                        const std::vector<glm::vec3>& c = *closePositions;
+                        const glm::vec3 c0 = c[t.x];
+                        const glm::dvec3 f1 = glm::dvec3(c[t.y]) - glm::dvec3(c0);
+                        const glm::dvec3 f2 = glm::dvec3(c[t.z]) - glm::dvec3(c0);
+                        out.motionTriangles.push_back(
+                            BvhTriangle{c0, p, glm::vec3(f1), masks[p], glm::vec3(f2), 0u,
+                                        glm::vec3(glm::cross(f1, f2)), 0u});
+                        if (c0 != v0 || c[t.y] != positions[t.y] || c[t.z] != positions[t.z])
+                            out.triangles.back().mask |= kBvhMovingBit;
+                    }
                     node.leafBits |= 1u << (3 * s + i);
                 }
                 ++out.stats.leaves;
@@ -382,18 +413,40 @@ BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm
     return out;
 }
 
+}  // namespace
+
+BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
+                  const std::vector<uint32_t>& triMask, const BvhBuildOptions& options) {
+    return build(positions, nullptr, triangles, triMask, options);
+}
+
+BvhBuild buildMotionBvh(const std::vector<glm::vec3>& openPositions,
+                        const std::vector<glm::vec3>& closePositions,
+                        const std::vector<glm::uvec3>& triangles,
+                        const std::vector<uint32_t>& triMask, const BvhBuildOptions& options) {
+    return build(openPositions, &closePositions, triangles, triMask, options);
+}
+
 void BvhGpu::upload(gpu::Context& gpu, const BvhBuild& build, const BvhBuild* previous) {
     // Nodes as texels of a 2D image, rows of kBvhNodeImageWidth; the last row zero-padded.
     constexpr uint32_t kTexelsPerNode = sizeof(BvhNode) / 16;
     std::vector<BvhNode> allNodes = build.nodes;
+    // Each tree's records, then its shutter-close records when it has motion.
     std::vector<BvhTriangle> allTriangles = build.triangles;
-    previousNodeBase = previousTriangleBase = 0;
+    motionOffset = build.motionTriangles.empty() ? 0u : uint32_t(build.triangles.size());
+    allTriangles.insert(allTriangles.end(), build.motionTriangles.begin(),
+                        build.motionTriangles.end());
+    previousNodeBase = previousTriangleBase = previousMotionOffset = 0;
     if (previous) {
         previousNodeBase = uint32_t(allNodes.size());
         previousTriangleBase = uint32_t(allTriangles.size());
+        previousMotionOffset =
+            previous->motionTriangles.empty() ? 0u : uint32_t(previous->triangles.size());
         allNodes.insert(allNodes.end(), previous->nodes.begin(), previous->nodes.end());
         allTriangles.insert(allTriangles.end(), previous->triangles.begin(),
                             previous->triangles.end());
+        allTriangles.insert(allTriangles.end(), previous->motionTriangles.begin(),
+                            previous->motionTriangles.end());
     }
     const size_t texels = std::max<size_t>(allNodes.size(), 1) * kTexelsPerNode;
     const size_t rows = (texels + kBvhNodeImageWidth - 1) / kBvhNodeImageWidth;

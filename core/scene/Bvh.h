@@ -58,13 +58,17 @@ struct BvhTriangle {
     glm::vec3 v0;
     uint32_t prim;  // index into the input triangle list
     glm::vec3 e1;   // v1 - v0
-    uint32_t mask;  // ray-mask bits of the triangle (low 8 bits)
+    uint32_t mask;  // ray-mask bits of the triangle (low 8 bits) | kBvhMovingBit
     glm::vec3 e2;   // v2 - v0
     uint32_t pad0 = 0;
     glm::vec3 ng;  // cross(e1, e2) from the exact vertices, rounded once (slivers stay exact)
     uint32_t pad1 = 0;
 };
 static_assert(sizeof(BvhTriangle) == 64);
+
+// Set in BvhTriangle::mask when the triangle moves over the shutter (buildMotionBvh): the
+// traversal then interpolates it with its shutter-close record.
+constexpr uint32_t kBvhMovingBit = 1u << 8;
 
 struct BvhBuildOptions {
     bool spatialSplits = true;      // RTC_BUILD_QUALITY_HIGH (SBVH); false: plain binned SAH
@@ -81,6 +85,8 @@ struct BvhStats {
 struct BvhBuild {
     std::vector<BvhNode> nodes;          // nodes[0] is the root
     std::vector<BvhTriangle> triangles;  // leaf order; one record per reference
+    // buildMotionBvh only: the same records at shutter close (empty for a static tree).
+    std::vector<BvhTriangle> motionTriangles;
     std::vector<glm::ivec4> adjacency;   // per input triangle (xyz, w = 0), see below
     glm::vec3 lower{0.0f}, upper{0.0f};  // scene bounds
     BvhStats stats;
@@ -94,6 +100,17 @@ constexpr uint32_t kBvhMaxDepth = 32;
 // gives a single empty root (every ray misses). triMask may be empty (all 0xff).
 BvhBuild buildBvh(const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
                   const std::vector<uint32_t>& triMask, const BvhBuildOptions& options = {});
+
+// Linear motion blur over the shutter, as Embree's triangles with two time steps: vertex i
+// moves on the segment from openPositions[i] (shutter open) to closePositions[i] (shutter
+// close). Boxes bound both ends, hence every time between (a triangle moving linearly stays in
+// the hull of its ends); spatial splits are off, since a split plane clips one time only.
+// Records of moving triangles carry kBvhMovingBit and their shutter-close twin in
+// motionTriangles (bvh.glsl interpolates at bvh_time).
+BvhBuild buildMotionBvh(const std::vector<glm::vec3>& openPositions,
+                        const std::vector<glm::vec3>& closePositions,
+                        const std::vector<glm::uvec3>& triangles,
+                        const std::vector<uint32_t>& triMask, const BvhBuildOptions& options = {});
 
 // For triangle i, component k is the triangle across edge (v[k], v[k+1 mod 3]), or -1 on a
 // boundary. On non-manifold edges (more than two triangles) it is the next triangle around
@@ -113,6 +130,9 @@ struct BvhGpu {
     // previousNodeBase and triangle record previousTriangleBase (bvh.glsl's bvh_node_base and
     // bvh_tri_base select it); without, both bases are 0.
     uint32_t previousNodeBase = 0, previousTriangleBase = 0;
+    // Distance from a record to its shutter-close twin, in the first and the previous tree
+    // (0: that tree has no motion). bvh.glsl's bvh_motion_offset.
+    uint32_t motionOffset = 0, previousMotionOffset = 0;
     void upload(gpu::Context& gpu, const BvhBuild& build, const BvhBuild* previous = nullptr);
     void bind(gpu::Bindings& bindings) const;
 };

@@ -46,9 +46,12 @@ struct SceneInfoGpu {
     // Where the previous frame's geometry is: vertex base, BVH node base, BVH triangle base
     // (all 0 when it is this frame's: static scenes, or nothing moved).
     glm::uvec4 previousGeometry{0u};
+    // Motion blur of moving shapes: offset of the shutter-close vertices, and the BVH motion
+    // offsets of this frame's and the previous frame's tree (all 0 without shutter motion).
+    glm::uvec4 motion{0u};
 };
 static_assert(sizeof(VertexGpu) == 32 && sizeof(ShapeGpu) == 32 && sizeof(TextureGpu) == 64 &&
-              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 4 * 64 + 48);
+              sizeof(LightGpu) == 64 && sizeof(SceneInfoGpu) == 4 * 64 + 64);
 
 enum : uint32_t {
     kLightTriangle,
@@ -99,10 +102,18 @@ std::array<glm::vec4, 3> motionRows(const glm::mat4& prev, const glm::mat4& now)
     return rows;
 }
 
+// Object to world of `shape` at shutter close of the frame whose shutter closes at `time`:
+// its keyframe path there, else its transform_end (Shape::toWorldEnd), else its toWorld.
+glm::mat4 shapeToWorldAtClose(const Shape& shape, float time) {
+    if (!shape.path.empty() || !shape.moving) return shapeToWorldAt(shape, time);
+    return shape.toWorldEnd;
+}
+
 }  // namespace
 
-// Shapes with a per-frame path (Shape::path) or a deformation (Shape::deformation): where
-// their vertices live, and the object to world of the current and the previous frame time.
+// Shapes with a per-frame path (Shape::path), a deformation (Shape::deformation) or shutter
+// motion (Shape::moving): where their vertices live, and the object to world of the current
+// and the previous frame time.
 struct MovingShape {
     size_t shape;
     uint32_t firstVertex;
@@ -130,6 +141,13 @@ struct SceneGpu::Impl {
     std::vector<glm::uvec3> cpuIndices;
     std::vector<uint32_t> cpuMasks;
     float shapeTime = 0.0f;  // frame time the vertices are at
+    // Motion blur over the shutter (blur: the camera's shutter is open for a while): the
+    // vertices at shutter close, as blocks 2 (this frame) and 3 (the previous frame) of the
+    // vertex buffer, and the frame time they are at.
+    bool blur = false;
+    float closeTime = 0.0f;
+    std::vector<VertexGpu> cpuCloseVertices;
+    std::vector<glm::vec3> cpuClosePositions;
 };
 
 SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
@@ -164,7 +182,7 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
         // keyframes so that light sampling discs (directional, environment) cover them.
         glm::mat4 toWorld = shapeToWorldAt(shape, shapeTime);
         const bool deforming = bool(shape.deformation);
-        if (!shape.path.empty() || deforming)
+        if (!shape.path.empty() || deforming || shape.moving)
             mImpl->moving.push_back({si, base, toWorld, toWorld, deforming});
         vertices.resize(base + mesh.positions.size());
         positions.resize(base + mesh.positions.size());
@@ -180,6 +198,13 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
         for (size_t v = base; v < positions.size(); ++v) {
             lo = glm::min(lo, positions[v]);
             hi = glm::max(hi, positions[v]);
+        }
+        if (shape.moving && shape.path.empty()) {  // transform_end: its pose at shutter close
+            for (const glm::vec3& p : mesh.positions) {
+                glm::vec3 w = glm::vec3(shape.toWorldEnd * glm::vec4(p, 1.0f));
+                lo = glm::min(lo, w);
+                hi = glm::max(hi, w);
+            }
         }
         if (!shape.path.empty()) {
             // Keyframes and segment midpoints, padded for the arcs of rotations in between.
@@ -337,9 +362,12 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     if (g.moving.empty()) {
         g.vertices = upload(gpu, vertices, "SceneVertices");
     } else {
-        std::vector<VertexGpu> both = vertices;
-        both.insert(both.end(), vertices.begin(), vertices.end());
-        g.vertices = upload(gpu, both, "SceneVertices");
+        // This frame's and the previous frame's vertices at shutter open, then the same at
+        // shutter close (motion blur; copies of the open ones until a frame blurs).
+        std::vector<VertexGpu> blocks;
+        blocks.reserve(4 * vertices.size());
+        for (int b = 0; b < 4; ++b) blocks.insert(blocks.end(), vertices.begin(), vertices.end());
+        g.vertices = upload(gpu, blocks, "SceneVertices");
     }
     g.triangles = upload(gpu, triangles, "SceneTriangles");
     g.shapes = upload(gpu, shapes, "SceneShapes");
@@ -364,6 +392,8 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     }
     g.shapeMotion = upload(gpu, g.shapeMotionRows, "SceneShapeMotion");
     if (!g.moving.empty()) {  // keep what per-frame updates need
+        g.cpuCloseVertices = vertices;
+        g.cpuClosePositions = positions;
         g.cpuVertices = std::move(vertices);
         g.cpuPositions = std::move(positions);
         g.cpuIndices = std::move(indices);
@@ -437,10 +467,13 @@ CameraPoseGpu poseAt(const Camera& base, float time, uint32_t width, uint32_t he
 }
 }  // namespace
 
-void SceneGpu::updateShapes(float time, bool firstFrame) {
+void SceneGpu::updateShapes(float frameTime, bool firstFrame) {
     auto& g = *mImpl;
     const auto start = std::chrono::steady_clock::now();
     if (g.moving.empty()) return;  // static scene: nothing to do, ever
+    const Camera& cam = mScene.camera;
+    const float time = frameTime + cam.shutterOpen, closeTime = frameTime + cam.shutterClose;
+    const bool blur = cam.shutterClose > cam.shutterOpen;
     std::vector<glm::mat4> now(g.moving.size());
     bool moved = false;
     for (size_t i = 0; i < g.moving.size(); ++i) {
@@ -448,48 +481,81 @@ void SceneGpu::updateShapes(float time, bool firstFrame) {
         moved =
             moved || now[i] != g.moving[i].now || (g.moving[i].deforming && time != g.shapeTime);
     }
+    const bool closeChanged = blur != g.blur || (blur && closeTime != g.closeTime);
     g.shapeTime = time;
-    if (!moved) {  // nothing moved since the last frame time: it is also the previous frame
+    if (!moved && !closeChanged) {  // nothing moved since the last frame: it is also the previous
         settleShapes();
         return;
     }
-    // The previous frame's vertices stay behind this frame's: only moving shapes differ there.
+    // The previous frame's vertices stay behind this frame's (block 1, and block 3 at shutter
+    // close): only moving shapes differ there.
     const size_t vertexCount = g.cpuVertices.size();
+    auto uploadRange = [&](const std::vector<VertexGpu>& from, const MovingShape& m, size_t count,
+                           size_t block) {
+        mGpu.uploadBuffer(*g.vertices, from.data() + m.firstVertex, count * sizeof(VertexGpu),
+                          (block * vertexCount + m.firstVertex) * sizeof(VertexGpu));
+    };
     for (size_t i = 0; i < g.moving.size(); ++i) {
         MovingShape& m = g.moving[i];
-        const Mesh& mesh = mScene.meshes[mScene.shapes[m.shape].mesh];
-        const size_t bytes = mesh.positions.size() * sizeof(VertexGpu);
-        mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
-                          (vertexCount + m.firstVertex) * sizeof(VertexGpu));
-        m.prev = firstFrame ? now[i] : m.now;
-        if (m.deforming) {
-            // Re-tessellated at this time; the motion map stays the rigid part (a deforming
-            // surface has no affine previous-frame map).
-            Mesh deformed = mScene.shapes[m.shape].deformation(time);
-            if (deformed.positions.size() != mesh.positions.size())
-                throw UserError("shape '" + mScene.shapes[m.shape].name +
-                                "': its deformation changes the vertex count");
-            transformVertices(deformed, now[i], g.cpuVertices.data() + m.firstVertex,
-                              g.cpuPositions.data() + m.firstVertex);
-            mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
-                              m.firstVertex * sizeof(VertexGpu));
-        } else if (now[i] != m.now) {
-            transformVertices(mesh, now[i], g.cpuVertices.data() + m.firstVertex,
-                              g.cpuPositions.data() + m.firstVertex);
-            mGpu.uploadBuffer(*g.vertices, g.cpuVertices.data() + m.firstVertex, bytes,
-                              m.firstVertex * sizeof(VertexGpu));
+        const Shape& shape = mScene.shapes[m.shape];
+        const Mesh& mesh = mScene.meshes[shape.mesh];
+        const size_t count = mesh.positions.size();
+        if (moved) {
+            uploadRange(g.cpuVertices, m, count, 1);
+            uploadRange(g.cpuCloseVertices, m, count, 3);
+            m.prev = firstFrame ? now[i] : m.now;
+        } else {
+            m.prev = now[i];
         }
+        // Re-tessellated at this time; the motion map stays the rigid part (a deforming
+        // surface has no affine previous-frame map).
+        auto place = [&](float t, const glm::mat4& toWorld, std::vector<VertexGpu>& vertices,
+                         std::vector<glm::vec3>& positions) {
+            if (m.deforming) {
+                Mesh deformed = shape.deformation(t);
+                if (deformed.positions.size() != count)
+                    throw UserError("shape '" + shape.name +
+                                    "': its deformation changes the vertex count");
+                transformVertices(deformed, toWorld, vertices.data() + m.firstVertex,
+                                  positions.data() + m.firstVertex);
+            } else {
+                transformVertices(mesh, toWorld, vertices.data() + m.firstVertex,
+                                  positions.data() + m.firstVertex);
+            }
+        };
+        if (m.deforming || now[i] != m.now) {
+            place(time, now[i], g.cpuVertices, g.cpuPositions);
+            uploadRange(g.cpuVertices, m, count, 0);
+        }
+        if (blur) {
+            place(closeTime, shapeToWorldAtClose(shape, closeTime), g.cpuCloseVertices,
+                  g.cpuClosePositions);
+        } else {  // no blur: shutter close is shutter open
+            std::copy_n(g.cpuVertices.begin() + m.firstVertex, count,
+                        g.cpuCloseVertices.begin() + m.firstVertex);
+            std::copy_n(g.cpuPositions.begin() + m.firstVertex, count,
+                        g.cpuClosePositions.begin() + m.firstVertex);
+        }
+        uploadRange(g.cpuCloseVertices, m, count, 2);
         m.now = now[i];
     }
+    g.blur = blur;
+    g.closeTime = closeTime;
     uploadMotionRows();
     // Rigid motion changes the tree's boxes: rebuild it (milliseconds for the project scenes;
     // a two-level BVH would spare the static part of large scenes), the last tree behind it.
-    BvhBuild build = buildBvh(g.cpuPositions, g.cpuIndices, g.cpuMasks);
+    // Under motion blur the boxes bound both ends of the shutter (buildMotionBvh).
+    BvhBuild build =
+        blur ? buildMotionBvh(g.cpuPositions, g.cpuClosePositions, g.cpuIndices, g.cpuMasks)
+             : buildBvh(g.cpuPositions, g.cpuIndices, g.cpuMasks);
     g.bvh.upload(mGpu, build, &g.lastBuild);
-    g.infoData.previousGeometry = firstFrame
+    g.infoData.previousGeometry = firstFrame || !moved
                                       ? glm::uvec4(0u)
                                       : glm::uvec4(uint32_t(vertexCount), g.bvh.previousNodeBase,
                                                    g.bvh.previousTriangleBase, 0u);
+    g.infoData.motion = blur ? glm::uvec4(uint32_t(2 * vertexCount), g.bvh.motionOffset,
+                                          g.bvh.previousMotionOffset, 0u)
+                             : glm::uvec4(0u);
     g.lastBuild = std::move(build);
     mStats.bvhNodes = g.lastBuild.stats.nodes;
     mStats.bvhBuildMs = g.lastBuild.stats.buildMs;
@@ -539,7 +605,11 @@ void SceneGpu::setFrame(float time, uint32_t width, uint32_t height) {
     bool first = mTime < 0.0f || width != mWidth || height != mHeight;
     info.prev = first ? info.open : prev;
     info.prevClose = first ? info.close : prevClose;
-    if (time != mTime) updateShapes(time + c.shutterOpen, mTime < 0.0f);
+    // Shapes move with the frame time, and over the shutter when it changes length.
+    const bool shutterChanged = c.shutterOpen != mShutterOpen || c.shutterClose != mShutterClose;
+    if (time != mTime || shutterChanged) updateShapes(time, mTime < 0.0f);
+    mShutterOpen = c.shutterOpen;
+    mShutterClose = c.shutterClose;
     mGpu.uploadBuffer(*mImpl->info, &info, sizeof(info));
     if (time != mTime || mCameraDirty) ++mRevision;
     mTime = time;

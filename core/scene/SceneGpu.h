@@ -43,9 +43,10 @@ public:
     glm::vec4 boundingSphere() const { return mBounds; }
 
 private:
-    // Moves shapes with a keyframe path to frame time `time` (vertices, BVH, the per-shape
-    // previous-frame maps of scene.glsl's previous_position); a no-op for static scenes.
-    void updateShapes(float time, bool firstFrame);
+    // Moves shapes with a keyframe path to frame time `frameTime` at shutter open (vertices,
+    // BVH, the per-shape previous-frame maps of scene.glsl's previous_position) and, when the
+    // shutter is open for a while, to shutter close (motion blur); a no-op for static scenes.
+    void updateShapes(float frameTime, bool firstFrame);
     // The previous frame becomes this one: identity motion maps, no previous geometry.
     void settleShapes();
     // Per moving shape, the map from this frame's positions to the previous frame's.
@@ -59,6 +60,7 @@ private:
     glm::vec4 mBounds{0.0f};
     uint64_t mRevision = 1;
     float mTime = -1.0f;
+    float mShutterOpen = 0.0f, mShutterClose = 0.0f;  // of the last updateShapes
     uint32_t mWidth = 0, mHeight = 0;
     bool mCameraDirty = true;
     bool mPreviousDiffers = false;  // the previous frame's camera or shapes differ from this one's

@@ -39,6 +39,12 @@ ivec3 bvh_adjacent(uint prim) { return bvh_adjacency.data[prim].xyz; }
 // Which tree rays traverse: node and triangle-record bases (0: the first tree; a scene with
 // moving shapes keeps the previous frame's tree behind it, see shading.glsl scene_select_frame).
 uint bvh_node_base = 0u, bvh_tri_base = 0u;
+// Motion blur of moving shapes (Bvh.h buildMotionBvh): the ray's time as a fraction of the
+// shutter (0 = open, 1 = close), and the distance from a triangle record to its shutter-close
+// twin in the selected tree (0: no motion). Set through shading.glsl's scene_set_time and
+// scene_select_frame; moving records (bit 8 of the mask word) move linearly between the two.
+float bvh_time = 0.0;
+uint bvh_motion_offset = 0u;
 // The stack holds one node group per tree level at most; the builder bounds the depth
 // (kBvhMaxDepth). The top 8 entries live in registers, deeper ones spill to a local array.
 #define BVH_STACK_SIZE 32
@@ -76,9 +82,31 @@ bool bvh_intersect_triangle(uint index, vec3 o, vec3 d, float tmin, float tmax, 
     uvec4 r0 = bvh_tris.data[4u * index], r1 = bvh_tris.data[4u * index + 1u];
     uvec4 r2 = bvh_tris.data[4u * index + 2u], r3 = bvh_tris.data[4u * index + 3u];
 #endif
-    vec3 e1 = uintBitsToFloat(r1.xyz), e2 = uintBitsToFloat(r2.xyz);
+    vec3 v0 = uintBitsToFloat(r0.xyz), e1 = uintBitsToFloat(r1.xyz), e2 = uintBitsToFloat(r2.xyz);
     vec3 ng = uintBitsToFloat(r3.xyz);
-    vec3 c = uintBitsToFloat(r0.xyz) - o;
+    if ((r1.w & 0x100u) != 0u && bvh_time != 0.0) {
+        // Moving triangle: vertices on the segments to the shutter-close record, in the form
+        // a + t (b - a) that scene.glsl's surface points use (exact at t = 0).
+        uint m = index + bvh_motion_offset;
+#ifndef BVH_NO_INT64
+        u64vec4 ma = bvh_tris.data[2u * m], mb = bvh_tris.data[2u * m + 1u];
+        vec3 c0 = uintBitsToFloat(uvec3(unpack32(ma.x), unpack32(ma.y).x));
+        vec3 f1 = uintBitsToFloat(uvec3(unpack32(ma.z), unpack32(ma.w).x));
+        vec3 f2 = uintBitsToFloat(uvec3(unpack32(mb.x), unpack32(mb.y).x));
+#else
+        vec3 c0 = uintBitsToFloat(bvh_tris.data[4u * m].xyz);
+        vec3 f1 = uintBitsToFloat(bvh_tris.data[4u * m + 1u].xyz);
+        vec3 f2 = uintBitsToFloat(bvh_tris.data[4u * m + 2u].xyz);
+#endif
+        vec3 p1 = v0 + e1, p2 = v0 + e2;
+        vec3 q0 = v0 + bvh_time * (c0 - v0);
+        vec3 q1 = p1 + bvh_time * (c0 + f1 - p1), q2 = p2 + bvh_time * (c0 + f2 - p2);
+        v0 = q0;
+        e1 = q1 - q0;
+        e2 = q2 - q0;
+        ng = cross(e1, e2);
+    }
+    vec3 c = v0 - o;
     vec3 r = cross(c, d);
     float den = dot(ng, d);
     float sgn = den < 0.0 ? -1.0 : 1.0;

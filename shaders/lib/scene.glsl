@@ -64,6 +64,10 @@ struct SceneInfo {
     // The previous frame's geometry (moving shapes): base of its vertices in scene_vertices,
     // of its BVH in the node image and triangle records; all 0 when it is this frame's.
     uvec4 previous_geometry;
+    // Motion blur of moving shapes: x = offset from a vertex to its shutter-close twin in
+    // scene_vertices (0: no shape moves over the shutter); y, z = bvh_motion_offset of this
+    // frame's and the previous frame's tree.
+    uvec4 motion;
 };
 
 layout(std430) readonly buffer SceneVertices { VertexGpu scene_vertices[]; };
@@ -82,6 +86,24 @@ layout(std430) readonly buffer SceneShapeMotion { vec4 scene_shape_motion[]; };
 // Which frame's vertices surface points are evaluated in: 0 this one, else
 // scene_info.previous_geometry.x (set through shading.glsl's scene_select_frame).
 uint scene_vertex_base = 0u;
+// The time surface points are evaluated at, as a fraction of the shutter (0 = open): shapes
+// that move over the shutter move linearly between their open and close vertices, as the BVH
+// intersects them (bvh.glsl bvh_time). Set with shading.glsl's scene_set_time.
+float scene_time = 0.0;
+
+// Vertex i of the selected frame at scene_time.
+VertexGpu scene_vertex(uint i) {
+    VertexGpu v = scene_vertices[scene_vertex_base + i];
+    if (scene_time != 0.0) {
+        uint close = scene_info.motion.x;
+        if (close != 0u) {  // a + t (b - a): static vertices stay exact
+            VertexGpu c = scene_vertices[scene_vertex_base + close + i];
+            v.position_u.xyz += scene_time * (c.position_u.xyz - v.position_u.xyz);
+            v.normal_v.xyz += scene_time * (c.normal_v.xyz - v.normal_v.xyz);
+        }
+    }
+    return v;
+}
 
 // Where the surface point p of `shape` was on the previous frame (rigid shape motion).
 vec3 previous_position(uint shape, vec3 p) {
@@ -133,9 +155,9 @@ struct SurfacePoint {
 
 void triangle_positions(uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     uvec4 tri = scene_triangles[prim];
-    p0 = scene_vertices[scene_vertex_base + tri.x].position_u.xyz;
-    p1 = scene_vertices[scene_vertex_base + tri.y].position_u.xyz;
-    p2 = scene_vertices[scene_vertex_base + tri.z].position_u.xyz;
+    p0 = scene_vertex(tri.x).position_u.xyz;
+    p1 = scene_vertex(tri.y).position_u.xyz;
+    p2 = scene_vertex(tri.z).position_u.xyz;
 }
 
 // Barycentrics (u, v) of the point of triangle prim's plane nearest to p (least squares; p on
@@ -153,9 +175,7 @@ vec2 triangle_barycentrics(uint prim, vec3 p) {
 
 SurfacePoint surface_point(uint prim, vec2 bary) {
     uvec4 tri = scene_triangles[prim];
-    VertexGpu v0 = scene_vertices[scene_vertex_base + tri.x];
-    VertexGpu v1 = scene_vertices[scene_vertex_base + tri.y];
-    VertexGpu v2 = scene_vertices[scene_vertex_base + tri.z];
+    VertexGpu v0 = scene_vertex(tri.x), v1 = scene_vertex(tri.y), v2 = scene_vertex(tri.z);
     float b0 = 1.0 - bary.x - bary.y;
     SurfacePoint s;
     s.prim = prim;

@@ -25,6 +25,16 @@ void scene_select_frame(bool previous) {
     scene_vertex_base = g.x;
     bvh_node_base = g.y;
     bvh_tri_base = g.z;
+    bvh_motion_offset = previous && g.z != 0u ? scene_info.motion.z : scene_info.motion.y;
+}
+
+// Rays and surface points from now on see shapes that move over the shutter at shutter
+// fraction `time` (0 = open, the default; cameras take theirs from camera_frame). Kernels
+// that sample a time per path call this before tracing it.
+void scene_set_time(float time) {
+    scene_time = time;
+    bvh_time = time;
+    bvh_motion_offset = bvh_tri_base != 0u ? scene_info.motion.z : scene_info.motion.y;
 }
 
 vec3 shading_to_local(ShadingPoint s, vec3 w) { return vec3(dot(w, s.t), dot(w, s.b), dot(w, s.n)); }

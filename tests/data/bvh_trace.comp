@@ -3,7 +3,8 @@
 // Ray i = (origin, tmin), (direction, tmax); result i = (t, prim, u, v) for closest hit
 // (prim = ~0u on a miss) or (occluded, 0, 0, 0) for any hit. With BVH_STATS defined, z and w
 // of a closest-hit result are the nodes and triangles visited and x the triangle-loop
-// iterations its subgroup ran; with BVH_ADJACENCY, xyz of result i are the neighbours of
+// iterations its subgroup ran; a motion tree (Bvh.h buildMotionBvh) is traced at shutter
+// fraction `time`; with BVH_ADJACENCY, xyz of result i are the neighbours of
 // triangle i instead.
 #include "lib/bvh.glsl"
 
@@ -18,11 +19,15 @@ layout(push_constant) uniform Params {
     uint rayCount;
     uint mask;
     uint anyHit;
+    float time;          // shutter fraction of a motion tree (bvh_time)
+    uint motionOffset;   // BvhGpu::motionOffset (0: static tree)
 } pc;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.rayCount) return;
+    bvh_time = pc.time;
+    bvh_motion_offset = pc.motionOffset;
 #ifndef BVH_NO_INT64
     u64vec4 r = rays.data[i];
     vec4 a = uintBitsToFloat(uvec4(unpack32(r.x), unpack32(r.y)));

@@ -244,7 +244,7 @@ protected:
     }
     static std::vector<glm::uvec4> trace(const scene::BvhGpu& bvh, const std::vector<Ray>& rays,
                                          uint32_t mask, bool anyHit,
-                                         const gpu::ComputePipeline& pipeline) {
+                                         const gpu::ComputePipeline& pipeline, float time = 0.0f) {
         auto rayBuf = sGpu->createBuffer(rays.size() * sizeof(Ray), "rays");
         sGpu->uploadBuffer(*rayBuf, rays.data(), rays.size() * sizeof(Ray));
         auto out = sGpu->createBuffer(rays.size() * sizeof(glm::uvec4), "results");
@@ -253,6 +253,7 @@ protected:
         b.set("rays", rayBuf).set("results", out);
         gpu::PushConstants pc(pipeline);
         pc.set("rayCount", uint32_t(rays.size())).set("mask", mask).set("anyHit", uint32_t(anyHit));
+        pc.set("time", time).set("motionOffset", bvh.motionOffset);
         auto cmd = sGpu->beginCommands();
         cmd->dispatchThreads(pipeline, b, &pc, uint32_t(rays.size()));
         sGpu->submit(*cmd);
@@ -263,16 +264,24 @@ protected:
 
     // Compares GLSL with Embree for every ray; returns the number of edge-ambiguous rays
     // (the two disagree only where a ray passes within float rounding of an edge).
-    static void compare(const TriMesh& mesh, const std::vector<Ray>& rays, uint32_t mask,
-                        const char* what) {
+    // With `close` (the same mesh at shutter close), a motion tree traced at shutter fraction
+    // `time` is compared with Embree on the mesh interpolated to that time.
+    static void compare(const TriMesh& open, const std::vector<Ray>& rays, uint32_t mask,
+                        const char* what, const TriMesh* close = nullptr, float time = 0.0f) {
         SCOPED_TRACE(::testing::Message() << what << ", mask 0x" << std::hex << mask);
-        const BvhBuild build = scene::buildBvh(mesh.positions, mesh.indices, mesh.masks);
+        TriMesh mesh = open;
+        if (close)
+            for (size_t i = 0; i < mesh.positions.size(); ++i)
+                mesh.positions[i] += time * (close->positions[i] - open.positions[i]);
+        const BvhBuild build = close ? scene::buildMotionBvh(open.positions, close->positions,
+                                                             open.indices, open.masks)
+                                     : scene::buildBvh(open.positions, open.indices, open.masks);
         EXPECT_LE(build.stats.depth, scene::kBvhMaxDepth);
         scene::BvhGpu bvh;
         bvh.upload(*sGpu, build);
         const EmbreeScene ref(sDevice, mesh, mask);
-        const auto closest = trace(bvh, rays, mask, false);
-        const auto any = trace(bvh, rays, mask, true);
+        const auto closest = trace(bvh, rays, mask, false, *sPipeline, time);
+        const auto any = trace(bvh, rays, mask, true, *sPipeline, time);
 
         // t within 1e-4 relative. Below 1% of the scene size the bound is absolute, since both
         // tracers lose digits to v0 - origin when the origin is that close to a surface; and it
@@ -407,6 +416,40 @@ TEST_F(BvhGpuTest, RayMasksMatchEmbree) {
     m.append(makeThin(2000, 6), 0x8u);
     const std::vector<Ray> rays = makeRays(m, kRays / 4, 7);
     for (uint32_t mask : {0xffu, 0x1u, 0x6u, 0x8u, 0x10u}) compare(m, rays, mask, "masked scene");
+}
+
+// Motion blur (Bvh.h buildMotionBvh): half the triangles of a soup move by up to half the
+// scene and turn, a sphere grows; at shutter open, close and between, the motion tree finds
+// what Embree finds in the mesh interpolated to that time (boxes bound every time).
+TEST_F(BvhGpuTest, MotionTreeMatchesEmbreeAtEveryTime) {
+    TriMesh open;
+    open.append(makeSoup(6000, 11), 0x1u);
+    open.append(makeSphere(24, 32, glm::vec3(0.2f, 0.0f, 0.1f), 0.4f), 0x2u);
+    TriMesh close = open;
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (size_t t = 0; t < 6000; ++t) {
+        if (t % 2) continue;  // static: exact at every time, without the moving bit
+        const glm::vec3 shift = 0.5f * glm::vec3(u(rng), u(rng), u(rng));
+        for (int k = 0; k < 3; ++k) {
+            glm::vec3& p = close.positions[open.indices[t][k]];
+            p = shift + glm::vec3(p.z, p.x, p.y);  // and a turn
+        }
+    }
+    for (size_t v = 3 * 6000; v < close.positions.size(); ++v)
+        close.positions[v] =
+            glm::vec3(0.2f, 0.0f, 0.1f) + 1.5f * (open.positions[v] - glm::vec3(0.2f, 0.0f, 0.1f));
+    const BvhBuild b =
+        scene::buildMotionBvh(open.positions, close.positions, open.indices, open.masks);
+    ASSERT_EQ(b.motionTriangles.size(), b.triangles.size());
+    size_t moving = 0;
+    for (const scene::BvhTriangle& r : b.triangles) moving += (r.mask & scene::kBvhMovingBit) != 0;
+    EXPECT_EQ(moving, 3000u + (open.indices.size() - 6000));
+    const std::vector<Ray> rays = makeRays(open, kRays / 4, 13);
+    for (float time : {0.0f, 0.37f, 1.0f}) {
+        compare(open, rays, 0xffu, "motion tree", &close, time);
+        compare(open, rays, 0x2u, "motion tree, sphere only", &close, time);
+    }
 }
 
 // The 16-byte-load path for devices without shaderInt64 gives the same answers, and the

@@ -84,9 +84,7 @@ CoplanarTriangle coplanar_triangle(uint prim, CoplanarQuery q) {
     uvec4 tri = scene_triangles[prim];
     t.vid = tri.xyz;
     t.prim = prim;
-    VertexGpu a = scene_vertices[scene_vertex_base + tri.x];
-    VertexGpu b = scene_vertices[scene_vertex_base + tri.y];
-    VertexGpu c = scene_vertices[scene_vertex_base + tri.z];
+    VertexGpu a = scene_vertex(tri.x), b = scene_vertex(tri.y), c = scene_vertex(tri.z);
     t.v0 = a.position_u.xyz;
     t.e1 = b.position_u.xyz - t.v0;
     t.e2 = c.position_u.xyz - t.v0;
