@@ -78,6 +78,7 @@ void main() {
         }
 #endif
         CameraFrame cam = camera_frame(scene_info.camera_open, scene_info.camera_close, shutter);
+        scene_set_time(shutter);  // moving shapes too, at the path's time
         vec3 o, d;
         camera_ray(cam, uv, u_lens, o, d);
 
