@@ -33,7 +33,7 @@ public:
     void reflect(PassReflection& r) const override {
         for (const auto& o : kOutputs) r.outputTexture(o.port, o.format).doc(o.doc);
         r.param("jitter", true).doc("random subpixel position per frame (else pixel centres)");
-        r.param("motionBlur", false).doc("sample time over the camera shutter");
+        r.param("motionBlur", false).doc("sample time over the shutter (camera and moving shapes)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = compileKernel(*this, shaders, "passes/gbuffer/gbuffer.comp");

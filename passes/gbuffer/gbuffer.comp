@@ -32,6 +32,7 @@ void main() {
     vec2 u_lens = rng_next2(rng);
     float shutter = pc.motionBlur != 0u ? rng_next(rng) : 0.0;
     CameraFrame cam = camera_frame(scene_info.camera_open, scene_info.camera_close, shutter);
+    scene_set_time(shutter);  // moving shapes at the same time: the path tracer's first hit
     vec3 o, d;
     camera_ray(cam, (vec2(pixel) + sub) / vec2(pc.frameSize), u_lens, o, d);
     ivec2 ip = ivec2(pixel);

@@ -33,8 +33,9 @@ public:
         r.param("rrDepth", 5).range(1, 64).doc("Russian roulette after this many bounces");
         r.paramEnum("strategy", "mis", {"mis", "bsdf", "nee"})
             .doc("NEE+BSDF with MIS, BSDF sampling only, or light sampling only");
-        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC")).doc("Veach 1997 Sec. 9.2");
-        r.param("motionBlur", true).doc("sample time over the camera shutter");
+        r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
+            .doc("Veach 1997 Sec. 9.2");
+        r.param("motionBlur", true).doc("sample time over the shutter (camera and moving shapes)");
         r.param("clamp", 0.0).min(0).doc("clamp path radiance (0 = off; biased, previews only)");
     }
     void execute(ExecuteContext& ctx) override {
@@ -45,7 +46,8 @@ public:
             for (auto& c : name) c = char(std::toupper(c));
             defines[name] = std::string(ctx.has(port) ? "1" : "0");
         }
-        auto pipeline = compileKernel(*this, ctx.shaders(), "passes/path_tracer/path_tracer.comp", defines);
+        auto pipeline =
+            compileKernel(*this, ctx.shaders(), "passes/path_tracer/path_tracer.comp", defines);
         auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         scene.bind(b);

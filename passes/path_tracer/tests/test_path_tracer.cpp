@@ -16,6 +16,7 @@
 #include "core/scene/SceneLoader.h"
 #include "core/scene/Shapes.h"
 #include "tests/support/RegionStats.h"
+#include "tests/support/TestSupport.h"
 
 using namespace loom;
 using namespace loom::scene;
@@ -840,7 +841,8 @@ TEST(PathTracer, MotionBlurEqualsAverageOfInstants) {
 // the blurred image equals the average of instantaneous frames at sub-shutter times, through a
 // keyframe path and through transform_end. Both shapes move linearly over the shutter, which
 // is the motion BVH's model, so the two agree up to noise; the shapes left at shutter open
-// (motionBlur off) must fail the same comparison.
+// (motionBlur off) must fail the same comparison. graphs/pt.json takes the first hit from the
+// GBuffer, which must trace it at the path's time (without, |z| 14.9 here).
 TEST(PathTracer, MovingShapeMotionBlurEqualsAverageOfInstants) {
     std::string path = std::string(LOOM_SOURCE_DIR) + "/scenes/cornell_box.json";
     ASSERT_TRUE(std::filesystem::exists(path)) << path;
@@ -868,13 +870,22 @@ TEST(PathTracer, MovingShapeMotionBlurEqualsAverageOfInstants) {
         return s;
     };
     const int frames = 24;
-    auto render = [&](const Scene& s, bool blur, bool instants, uint32_t seed) {
+    auto render = [&](const Scene& s, bool blur, bool instants, uint32_t seed,
+                      bool gbuffer = false) {
         RegionStats stats(4);
-        Renderer r(sharedGpu(),
-                   ptGraph({{"samplesPerPixel", 8}, {"maxBounces", 3}, {"motionBlur", blur}}), 32,
-                   32, seed);
+        // Through the GBuffer every sample is a first sample: 1 spp, 8x the frames.
+        json params = {
+            {"samplesPerPixel", gbuffer ? 1 : 8}, {"maxBounces", 3}, {"motionBlur", blur}};
+        std::unique_ptr<RenderGraph> graph = ptGraph(params);
+        if (gbuffer) {  // graphs/pt.json: the first sample's hit from the GBuffer at its time
+            json g = json::parse(test::readFile(std::string(LOOM_SOURCE_DIR) + "/graphs/pt.json"));
+            g["passes"][1]["params"] = params;
+            g["outputs"] = {"pt.color"};
+            graph = RenderGraph::parse(g.dump(), "graphs/pt.json");
+        }
+        Renderer r(sharedGpu(), std::move(graph), 32, 32, seed);
         r.setScene(s);
-        for (int f = 0; f < frames; ++f) {
+        for (int f = 0; f < (gbuffer ? 8 * frames : frames); ++f) {
             if (instants) r.setTime((f + 0.5f) / float(frames));
             r.frame();
             stats.add(r.readOutput("pt.color"));
@@ -894,6 +905,11 @@ TEST(PathTracer, MovingShapeMotionBlurEqualsAverageOfInstants) {
     double zPath = maxZ(render(blurredPath, true, false, 3), average, &a, &b);
     std::printf("keyframe path: blurred %.5f vs instants %.5f, max |z| %.2f\n", a, b, zPath);
     EXPECT_LT(zPath, 4.5);
+    double zGBuffer = maxZ(render(blurredPath, true, false, 11, true), average, &a, &b);
+    std::printf(
+        "graphs/pt.json (GBuffer first hits): blurred %.5f vs instants %.5f, max |z| %.2f\n", a, b,
+        zGBuffer);
+    EXPECT_LT(zGBuffer, 4.5);
     double zEnd = maxZ(render(blurredEnd, true, false, 7), average, &a, &b);
     std::printf("transform_end: blurred %.5f vs instants %.5f, max |z| %.2f\n", a, b, zEnd);
     EXPECT_LT(zEnd, 4.5);
