@@ -69,8 +69,10 @@ void main() {
             // Partition n = step - 1: where x1 lands at time (n + u) / K.
             PathSample sn = rq.s;
             sn.time = splat_time_forward(rq.s.time, step - 1u, K);
-            if (!front || !splat_project(restir_sample_pose(cfg, sn, false), u_lens, xc.p, xc.ng,
-                                         pc.frameSize, to) ||
+            CameraPose pose_n = restir_sample_pose(cfg, sn, false);
+            // x1 in this frame at that time (shapes moving over the shutter move it).
+            if (sn.time != rq.s.time) xc = surface_point(rec.prim, rec.bary);
+            if (!front || !splat_project(pose_n, u_lens, xc.p, xc.ng, pc.frameSize, to) ||
                 !film_on_screen(to.film, pc.frameSize)) {
                 status = SPLAT_OFF_SCREEN;
             } else {

@@ -194,12 +194,13 @@ void main() {
         if (!valid) continue;
         // Kept x1 into the previous frame: project it through the same lens sample.
         if (!copy && prev) {
+            s.time = splat_time_backward(s.time, K);
+            CameraPose pose_prev = restir_sample_pose(cfg, s, true);  // at the reverse time
             scene_select_frame(true);
             SurfacePoint xp = surface_point(x.prim, x.bary);
             area_to = xp.area;
             scene_select_frame(false);
-            s.time = splat_time_backward(s.time, K);
-            if (!splat_project(restir_sample_pose(cfg, s, true), s.film_lens.zw, xp.p, xp.ng, fs, to) ||
+            if (!splat_project(pose_prev, s.film_lens.zw, xp.p, xp.ng, fs, to) ||
                 !film_on_screen(to.film, fs))
                 continue;
             uvec2 rp = min(uvec2(floor(to.film)), fs - 1u);

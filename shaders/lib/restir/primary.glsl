@@ -26,10 +26,15 @@ PrimaryHit restir_trace_primary(CameraPose pose, ivec2 pixel, vec4 film_lens, uv
 }
 
 // The camera sample s sees in this frame (previous = false) or the previous one: the shutter-open
-// pose, or with motion blur (restir_has_time) the pose at the sample's shutter time.
+// pose, or with motion blur (restir_has_time) the pose at the sample's shutter time. With motion
+// blur it also moves the shapes that move over the shutter to that time (scene_set_time), so
+// every evaluation of a sample, which starts here, sees the scene at the sample's time.
 CameraPose restir_sample_pose(RestirSettings cfg, PathSample s, bool previous) {
     CameraPose open = previous ? scene_info.camera_prev : scene_info.camera_open;
     if (!restir_has_time(cfg)) return open;
+#ifndef LOOM_TEST_SHAPES_AT_SHUTTER_OPEN  // the ablation ReservoirSplat's test must detect
+    scene_set_time(s.time);
+#endif
     return camera_pose_at(open, previous ? scene_info.camera_prev_close : scene_info.camera_close,
                           s.time);
 }
