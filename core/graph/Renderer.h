@@ -83,6 +83,7 @@ private:
     uint32_t mWidth, mHeight, mSeed;
     uint64_t mExternalRevision = 0;
     uint64_t mFrames = 0;
+    bool mShapeMotionBlur = false;  // LOOM_SHAPE_MOTION_BLUR is among the compiler's defines
 };
 
 }  // namespace loom

@@ -433,6 +433,10 @@ void SceneGpu::bind(gpu::Bindings& b) const {
     g.bvh.bind(b);
 }
 
+bool SceneGpu::shapesMoveOverShutter() const {
+    return !mImpl->moving.empty() && mScene.camera.shutterClose > mScene.camera.shutterOpen;
+}
+
 void SceneGpu::setCamera(const Camera& camera) {
     mScene.camera = camera;
     mCameraDirty = true;

@@ -36,6 +36,10 @@ public:
     void setCamera(const Camera& camera);
 
     const Scene& cpu() const { return mScene; }
+    // Whether shapes move over the camera's shutter (moving shapes and an open shutter): then
+    // kernels need the motion-blur code of the BVH and the surface points, compiled in only
+    // with LOOM_SHAPE_MOTION_BLUR (Renderer sets it), since it slows static traversal.
+    bool shapesMoveOverShutter() const;
     const SceneStats& stats() const { return mStats; }
     // Changes whenever the camera or frame time changes: passes with history reset on it.
     uint64_t revision() const { return mRevision; }

@@ -94,6 +94,7 @@ float scene_time = 0.0;
 // Vertex i of the selected frame at scene_time.
 VertexGpu scene_vertex(uint i) {
     VertexGpu v = scene_vertices[scene_vertex_base + i];
+#ifdef LOOM_SHAPE_MOTION_BLUR  // only while shapes move over the shutter (bvh.glsl)
     if (scene_time != 0.0) {
         uint close = scene_info.motion.x;
         if (close != 0u) {  // a + t (b - a): static vertices stay exact
@@ -102,6 +103,7 @@ VertexGpu scene_vertex(uint i) {
             v.normal_v.xyz += scene_time * (c.normal_v.xyz - v.normal_v.xyz);
         }
     }
+#endif
     return v;
 }
 

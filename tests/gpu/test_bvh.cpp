@@ -228,10 +228,14 @@ protected:
         sCompiler = new ShaderCompiler({LOOM_SOURCE_DIR "/shaders", LOOM_SOURCE_DIR}, "");
         auto shader = sCompiler->compile("tests/data/bvh_trace.comp");
         sPipeline = sGpu->createPipeline(shader->spirv, shader->reflection, "bvh_trace");
+        auto motion =
+            sCompiler->compile("tests/data/bvh_trace.comp", {{"LOOM_SHAPE_MOTION_BLUR", "1"}});
+        sMotionPipeline = sGpu->createPipeline(motion->spirv, motion->reflection, "bvh_motion");
         sDevice = rtcNewDevice(nullptr);
     }
     static void TearDownTestSuite() {
         sPipeline.reset();
+        sMotionPipeline.reset();
         delete sCompiler;
         sGpu.reset();
         rtcReleaseDevice(sDevice);
@@ -280,8 +284,9 @@ protected:
         scene::BvhGpu bvh;
         bvh.upload(*sGpu, build);
         const EmbreeScene ref(sDevice, mesh, mask);
-        const auto closest = trace(bvh, rays, mask, false, *sPipeline, time);
-        const auto any = trace(bvh, rays, mask, true, *sPipeline, time);
+        const gpu::ComputePipeline& pipeline = close ? *sMotionPipeline : *sPipeline;
+        const auto closest = trace(bvh, rays, mask, false, pipeline, time);
+        const auto any = trace(bvh, rays, mask, true, pipeline, time);
 
         // t within 1e-4 relative. Below 1% of the scene size the bound is absolute, since both
         // tracers lose digits to v0 - origin when the origin is that close to a surface; and it
@@ -370,13 +375,13 @@ protected:
 
     static std::shared_ptr<gpu::Context> sGpu;
     static ShaderCompiler* sCompiler;
-    static std::shared_ptr<gpu::ComputePipeline> sPipeline;
+    static std::shared_ptr<gpu::ComputePipeline> sPipeline, sMotionPipeline;
     static RTCDevice sDevice;
 };
 
 std::shared_ptr<gpu::Context> BvhGpuTest::sGpu;
 ShaderCompiler* BvhGpuTest::sCompiler = nullptr;
-std::shared_ptr<gpu::ComputePipeline> BvhGpuTest::sPipeline;
+std::shared_ptr<gpu::ComputePipeline> BvhGpuTest::sPipeline, BvhGpuTest::sMotionPipeline;
 RTCDevice BvhGpuTest::sDevice = nullptr;
 
 constexpr uint32_t kRays = 100000;
