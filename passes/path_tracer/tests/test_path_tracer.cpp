@@ -917,3 +917,44 @@ TEST(PathTracer, MovingShapeMotionBlurEqualsAverageOfInstants) {
     std::printf("shapes at shutter open: %.5f vs instants %.5f, max |z| %.2f\n", a, b, zOpen);
     EXPECT_GT(zOpen, 4.5) << "the comparison cannot see shapes left at shutter open";
 }
+
+// The motion-blur code of moving shapes is compiled in only while shapes move over the shutter
+// (LOOM_SHAPE_MOTION_BLUR, set by the Renderer): opening the shutter at run time gives the
+// blurred image, and closing it again the sharp one, in the same renderer.
+TEST(PathTracer, ShutterChangedAtRunTimeRecompilesMotionBlur) {
+    Scene s = loadScene(std::string(LOOM_SOURCE_DIR) + "/scenes/cornell_box.json");
+    for (Shape& shape : s.shapes)
+        if (shape.name == "tall_box")
+            shape.path = {{0.0f, glm::vec3(0.0f)}, {1.0f, glm::vec3(0.5f, 0.0f, 0.2f)}};
+    s.camera.shutterOpen = 0.0f;
+    s.camera.shutterClose = 1.0f;
+    Camera closed = s.camera;
+    closed.shutterClose = 0.0f;
+    json params = {{"samplesPerPixel", 8}, {"maxBounces", 3}};
+    auto frames = [](Renderer& r, int n) {
+        RegionStats stats(4);
+        for (int f = 0; f < n; ++f) {
+            r.frame();
+            stats.add(r.readOutput("pt.color"));
+        }
+        return stats;
+    };
+    // Compiled first without the motion code, then opened: a renderer that did not recompile
+    // would keep the box sharp.
+    Scene sharpScene = s;
+    sharpScene.camera = closed;
+    Renderer r(sharedGpu(), ptGraph(params), 32, 32, 3);
+    r.setScene(sharpScene);
+    RegionStats sharp = frames(r, 24);
+    r.scene()->setCamera(s.camera);
+    RegionStats blurred = frames(r, 24);
+    r.scene()->setCamera(closed);
+    RegionStats sharpAgain = frames(r, 24);
+
+    Renderer fresh(sharedGpu(), ptGraph(params), 32, 32, 9);
+    fresh.setScene(s);
+    RegionStats blurredFresh = frames(fresh, 24);
+    EXPECT_LT(maxZ(blurred, blurredFresh), 4.5) << "opening the shutter at run time";
+    EXPECT_LT(maxZ(sharpAgain, sharp), 4.5) << "closing it again";
+    EXPECT_GT(maxZ(sharp, blurred), 4.5) << "the blur is not visible to the test";
+}
