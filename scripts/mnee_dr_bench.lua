@@ -40,36 +40,20 @@ local function scene_with(n, height_scale)
   return copy
 end
 
--- GPU ms per frame over `frames` animated frames (times 1..frames; frame 0 warms up), and the
--- scene update's CPU ms.
-local function animated_ms(r)
-  r:set_time(0)
-  r:frame()
-  local gpu, update, adjacency = 0, 0, 0
-  for f = 1, frames do
-    r:set_time(f)
-    r:frame()
-    local st = r:stats()
-    gpu = gpu + r:timings().frame_ms
-    update = update + st["scene.updateMs"]
-    adjacency = adjacency + st["scene.adjacencyMs"]
-  end
-  return gpu / frames, update / frames, adjacency / frames, r:stats()
-end
-
 print(string.format("== 1. time per frame vs tessellation, %dx%d, %d animated frames each", W, H,
                     frames))
 local rows = {}
 for i, n in ipairs(resolutions) do
   local file = scene_with(n)
   local r = loom.renderer{graph = "graphs/mnee_dr.json", scene = file, width = W, height = H}
-  local ms, update, adjacency, st = animated_ms(r)
+  local c, st = util.animated_costs(r, frames)
   r:close()
   local p = loom.renderer{graph = "graphs/pt.json", scene = file, width = W, height = H}
-  local pt_ms = animated_ms(p)
+  local pt_ms = util.animated_costs(p, frames).gpu_ms
   p:close()
-  rows[#rows + 1] = {water_triangles = 2 * n * n, frame_ms = ms, pt_ms = pt_ms,
-                     caustic_ms = ms - pt_ms, update_ms = update, adjacency_ms = adjacency,
+  rows[#rows + 1] = {water_triangles = 2 * n * n, frame_ms = c.gpu_ms, pt_ms = pt_ms,
+                     caustic_ms = c.gpu_ms - pt_ms, update_ms = c.update_ms,
+                     adjacency_ms = c.adjacency_ms,
                      triangles_per_walk = st["mnee.trianglesPerWalk"],
                      success = st["mnee.successRate"], walks = st["mnee.walks"]}
   loom.progress(i, #resolutions, "tessellation")

@@ -20,21 +20,12 @@ for _, scene in ipairs(scenes) do
     for _, open in ipairs({false, true}) do
       local r = loom.renderer{graph = graph, scene = path, width = W, height = H, seed = 1}
       r:shutter(0, open and shutter or 0)
-      r:set_time(0)
-      r:frame()
-      local gpu, update, build = 0, 0, 0
-      for f = 1, frames do
-        r:set_time(f)
-        r:frame()
-        local st = r:stats()
-        gpu = gpu + r:timings().frame_ms
-        update = update + st["scene.updateMs"]
-        build = build + st["scene.bvhBuildMs"]
-      end
+      local c = util.animated_costs(r, frames)
+      r:close()
       local key = open and "blur" or "sharp"
-      row[key .. "_ms"] = string.format("%.1f", gpu / frames)
-      row[key .. "_update_ms"] = string.format("%.1f", update / frames)
-      row[key .. "_bvh_ms"] = string.format("%.1f", build / frames)
+      row[key .. "_ms"] = string.format("%.1f", c.gpu_ms)
+      row[key .. "_update_ms"] = string.format("%.1f", c.update_ms)
+      row[key .. "_bvh_ms"] = string.format("%.1f", c.bvh_ms)
     end
     rows[#rows + 1] = row
   end

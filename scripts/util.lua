@@ -66,6 +66,25 @@ function util.reference(opts)
   return img
 end
 
+-- Costs of a renderer along its scene's motion: frame 0 warms up (shader compiles), then frames
+-- at times 1..frames. Returns the means of GPU ms per frame and of the scene update's CPU ms
+-- (scene.updateMs, of which scene.bvhBuildMs and scene.adjacencyMs), and the last stats.
+function util.animated_costs(r, frames)
+  r:set_time(0)
+  r:frame()
+  local c = {gpu_ms = 0, update_ms = 0, bvh_ms = 0, adjacency_ms = 0}
+  for f = 1, frames do
+    r:set_time(f)
+    r:frame()
+    local st = r:stats()
+    c.gpu_ms = c.gpu_ms + r:timings().frame_ms / frames
+    c.update_ms = c.update_ms + st["scene.updateMs"] / frames
+    c.bvh_ms = c.bvh_ms + st["scene.bvhBuildMs"] / frames
+    c.adjacency_ms = c.adjacency_ms + st["scene.adjacencyMs"] / frames
+  end
+  return c, r:stats()
+end
+
 -- Prints rows as an aligned text table. columns = {{key=, title=, fmt=}, ...}.
 function util.print_table(columns, rows)
   local cells, widths = {}, {}

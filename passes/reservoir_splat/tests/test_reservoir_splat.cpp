@@ -25,6 +25,18 @@ std::map<std::string, double> passStats(Renderer& r, const std::string& pass) {
     return {};
 }
 
+// The Cornell box with its tall box moving along keyframes `path` (Loom JSON), loaded through
+// the scene loader as a user's file would be.
+scene::Scene cornellWithMovingBox(const char* path) {
+    json scene = json::parse(readFile(sourcePath("scenes/cornell_box.json")));
+    for (auto& shape : scene["shapes"])
+        if (shape["name"] == "tall_box") shape["path"] = json::parse(path);
+    TempDir tmp("loom-splat-moving");
+    std::string file = tmp / "cornell_moving.json";
+    writeFile(file, scene.dump());
+    return scene::loadScene(file);
+}
+
 }  // namespace
 
 // Camera motion: the Cornell box's and the glossy scene's camera paths (translation and
@@ -69,16 +81,10 @@ TEST(ReservoirSplat, UnbiasedWithDepthOfFieldAndMovingShapes) {
             << graph << " thin lens: " << dof.restir << " vs " << dof.reference;
     }
 
-    json scene = json::parse(readFile(sourcePath("scenes/cornell_box.json")));
-    for (auto& shape : scene["shapes"])
-        if (shape["name"] == "tall_box")
-            shape["path"] = json::parse(R"([{"time": 0, "translate": [0, 0, 0]},
-                {"time": 21, "translate": [0.35, 0, 0.05], "rotate": {"axis": [0, 1, 0], "angle": 50}}])");
-    TempDir tmp("loom-splat-moving");
-    std::string path = tmp / "cornell_moving.json";
-    writeFile(path, scene.dump());
+    scene::Scene movingBox = cornellWithMovingBox(R"([{"time": 0, "translate": [0, 0, 0]},
+        {"time": 21, "translate": [0.35, 0, 0.05], "rotate": {"axis": [0, 1, 0], "angle": 50}}])");
     for (const char* graph : {"splat.json", "splat_backup.json"}) {
-        auto moving = compareWithReference(scene::loadScene(path), graph, {}, 3.0f);
+        auto moving = compareWithReference(movingBox, graph, {}, 3.0f);
         EXPECT_TRUE(moving.unbiased())
             << graph << " moving box: " << moving.restir << " vs " << moving.reference;
     }
@@ -298,15 +304,8 @@ TEST(ReservoirSplat, UnbiasedMotionBlurAndTimeJacobianAblation) {
 // copied time match the path tracer, which blurs the box the same way; ReSTIR evaluating the
 // shapes at shutter open while the camera blurs must be detected.
 TEST(ReservoirSplat, UnbiasedMotionBlurOfMovingShapes) {
-    json scene = json::parse(readFile(sourcePath("scenes/cornell_box.json")));
-    for (auto& shape : scene["shapes"])
-        if (shape["name"] == "tall_box")
-            shape["path"] = json::parse(R"([{"time": 0, "translate": [0, 0, 0]},
-                {"time": 24, "translate": [0.5, 0, 0.1], "rotate": {"axis": [0, 1, 0], "angle": 40}}])");
-    TempDir tmp("loom-splat-blur-moving");
-    std::string path = tmp / "cornell_moving.json";
-    writeFile(path, scene.dump());
-    scene::Scene s = scene::loadScene(path);
+    scene::Scene s = cornellWithMovingBox(R"([{"time": 0, "translate": [0, 0, 0]},
+        {"time": 24, "translate": [0.5, 0, 0.1], "rotate": {"axis": [0, 1, 0], "angle": 40}}])");
     s.camera.shutterOpen = 0.0f;
     s.camera.shutterClose = 12.0f;
     for (const char* mode : {"multi_scatter", "gather"}) {
