@@ -87,6 +87,7 @@ void main() {
     g_cfg.frame_size = pc.frameSize;
     g_cfg.mis_heuristic = pc.misHeuristic;
     g_cfg.area = 0u;
+    g_cfg.covered_max_chain = g_cfg.covered_depth = 0u;
 
     // The base path's film, lens and shutter samples; the offset paths replay them at their
     // pixel (primary sample space: Jacobian 1).

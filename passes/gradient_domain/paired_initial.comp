@@ -37,7 +37,6 @@ void main() {
     ps.restir = settings_in;
     ps.positivization = pc.positivization;
     ps.measure = pc.measure;
-    ps.pad0 = ps.pad1 = 0u;
     if (idx == 0u) pair_settings_out = ps;
     features_out[idx] = pixel_features(primary_in[idx], false);
     bool solid_angle = ps.measure == PAIR_MEASURE_SOLID_ANGLE;

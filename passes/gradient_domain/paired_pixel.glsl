@@ -25,7 +25,6 @@ struct PairSettings {
     RestirSettings restir;  // the path samples' rules (Area ReSTIR's initial pass)
     uint positivization;    // 1: separate reservoirs for g >= 0 and g < 0
     uint measure;           // PAIR_MEASURE_*
-    uint pad0, pad1;
 };
 
 // The measure of the pair integrand. Mixed: reservoir.glsl's (area at the reconnection vertex

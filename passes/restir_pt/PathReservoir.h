@@ -13,7 +13,7 @@
 
 namespace loom::restir {
 
-constexpr uint64_t kSettingsBytes = 32;    // RestirSettings header of a reservoir buffer
+constexpr uint64_t kSettingsBytes = 48;    // RestirSettings header of a reservoir buffer
 constexpr uint64_t kReservoirBytes = 112;  // PathReservoir
 constexpr uint64_t kPrimaryHitBytes = 32;  // PrimaryHit
 

@@ -43,9 +43,19 @@ public:
         r.param("motionBlur", false)
             .doc(
                 "reuse = area: each candidate also samples a shutter time (PathTracer's uniform "
-                "shutter fraction) that belongs to the sample: camera motion blur, shapes at "
-                "shutter "
-                "open (pair with GBuffer.motionBlur = true for the directly seen emission)");
+                "shutter fraction) that belongs to the sample: the camera and moving shapes "
+                "blurred (pair with GBuffer.motionBlur = true for the directly seen emission)");
+        r.param("coveredMaxChain", 0)
+            .range(0, 4)
+            .doc(
+                "> 0: leave out the paths a caustic estimator (SMS, psms) produces, with chains "
+                "of up to this many specular vertices (its maxChain), for every later reuse "
+                "too; 0: every path");
+        r.param("coveredDepth", 0)
+            .range(0, 8)
+            .doc(
+                "with coveredMaxChain: the deepest receiver, behind this many specular "
+                "vertices (0: primary hits; the caustic estimator's receiverDepth)");
     }
     void compile(ShaderLibrary& shaders) override {
         mPipeline = compileKernel(*this, shaders, "passes/restir_pt/initial.comp");

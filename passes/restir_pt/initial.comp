@@ -40,6 +40,8 @@ layout(push_constant) uniform Params {
     uint reuse;  // REUSE_PATH, REUSE_AREA
     uint rrDepth;
     uint motionBlur;
+    uint coveredMaxChain;  // 0: every path; else leave out what a caustic estimator covers
+    uint coveredDepth;
 } pc;
 
 void main() {
@@ -54,6 +56,8 @@ void main() {
     cfg.frame_size = pc.frameSize;
     cfg.mis_heuristic = pc.misHeuristic;
     cfg.area = pc.reuse == REUSE_AREA ? RESTIR_AREA | (pc.motionBlur != 0u ? RESTIR_AREA_TIME : 0u) : 0u;
+    cfg.covered_max_chain = pc.coveredMaxChain;
+    cfg.covered_depth = pc.coveredDepth;
     if (idx == 0u) settings_out = cfg;
 
     // The camera vertex of the GBuffer's primary ray (same film and lens sample, shutter open).

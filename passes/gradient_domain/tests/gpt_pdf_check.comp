@@ -47,6 +47,7 @@ void main() {
     g_cfg.frame_size = pc.frameSize;
     g_cfg.mis_heuristic = MIS_HEURISTIC_POWER;
     g_cfg.area = 0u;
+    g_cfg.covered_max_chain = g_cfg.covered_depth = 0u;
     Rng rng = rng_init(pixel, pc.frameIndex, pc.seed);
     vec4 film_lens = vec4(rng_next2(rng), rng_next2(rng));
     g_self = restir_trace_primary(scene_info.camera_open, ivec2(pixel), film_lens, pc.frameSize);

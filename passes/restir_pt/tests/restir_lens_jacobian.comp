@@ -39,6 +39,7 @@ void main() {
     if (any(greaterThanEqual(pixel, pc.frameSize))) return;
     RestirSettings cfg;
     cfg.area = 1u;
+    cfg.covered_max_chain = cfg.covered_depth = 0u;
     cfg.frame_size = pc.frameSize;
     Rng rng = rng_init(pixel, 0u, 11u);
     PathSample s = reservoir_empty().s;

@@ -9,6 +9,7 @@
 
 #include "lib/color.glsl"
 #include "lib/integrator/nee.glsl"
+#include "lib/manifold/coverage.glsl"
 #include "lib/restir/path_rules.glsl"
 #include "lib/restir/primary.glsl"
 #include "lib/restir/reservoir.glsl"
@@ -85,6 +86,8 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
     s.seed = seed;
     s.time = time;
     s.film_lens = film_lens;
+    // Paths a caustic estimator covers are no candidates (cfg.covered_max_chain > 0).
+    ManifoldCoverage cov = manifold_coverage_none();
     for (uint j = 1u; j <= cfg.max_bounces; ++j) {
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
         vec3 wo = shading_to_local(sh, -d);
@@ -145,6 +148,8 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
         // BSDF sampling towards x_{j+1}.
         BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
         if (!bsdf_sample_valid(bs)) break;
+        cov = manifold_coverage_step(cov, sh, j - 1u, cfg.covered_depth, cfg.covered_max_chain,
+                                     bs.flags);
         bool delta = (bs.flags & BSDF_DELTA) != 0u;
         vec3 beta_next = beta * bsdf_sample_weight(bs);
         if (g.k != 0u && j >= rr_depth) {
@@ -168,7 +173,8 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
         }
         vec3 Le = emitter_hit_radiance(dn, found, sn);
         // Emitter-hit candidate: the path x1 .. x_{j+1} (n = j + 1).
-        if (any(greaterThan(Le, vec3(0.0)))) {
+        if (any(greaterThan(Le, vec3(0.0))) &&
+            !(found && manifold_coverage_covers(cov, sn.shape_flags))) {
             float light_pdf = emitter_hit_light_pdf(sh.sp.p, dn, found, hit.prim, sn);
             float w = delta ? 1.0 : mis_weight(bs.pdf, light_pdf, cfg.mis_heuristic);
             vec3 C = beta_next * Le * w;

@@ -11,6 +11,7 @@
 #define LOOM_RESTIR_HYBRID_SHIFT_GLSL
 
 #include "lib/integrator/nee.glsl"
+#include "lib/manifold/coverage.glsl"
 #include "lib/restir/counters.glsl"
 #include "lib/restir/path_rules.glsl"
 #include "lib/restir/primary.glsl"
@@ -175,6 +176,10 @@ vec3 restir_shift_with_density(RestirSettings cfg, PathSample s, PrimaryHit dst,
     uint last_replayed = reconnect ? k - 1u : n - 1u;
     vec3 result = vec3(0.0);
     uint rays = 0u;
+    // A replayed path that a caustic estimator covers is outside this integrand (generation.glsl
+    // leaves such paths out). Only pure replay can meet one: a covered path has no smooth vertex
+    // after its receiver, hence no reconnection vertex.
+    ManifoldCoverage cov = manifold_coverage_none();
     for (uint j = 1u;; ++j) {
         bool rough_j = restir_vertex_rough(sh.mat, cfg.rough_threshold);
         vec3 wo = shading_to_local(sh, -d);
@@ -205,6 +210,8 @@ vec3 restir_shift_with_density(RestirSettings cfg, PathSample s, PrimaryHit dst,
             // Replay the BSDF sample of x_j towards y_{j+1}.
             bs = bsdf_sample(sh.mat, wo, u_bsdf);
             if (!bsdf_sample_valid(bs)) break;
+            cov = manifold_coverage_step(cov, sh, j - 1u, cfg.covered_depth,
+                                         cfg.covered_max_chain, bs.flags);
             ray_d = shading_to_world(sh, bs.wi);
             ray_o = offset_ray_origin(sh.sp.p, sh.sp.ng, ray_d);
         }
@@ -235,6 +242,7 @@ vec3 restir_shift_with_density(RestirSettings cfg, PathSample s, PrimaryHit dst,
             dist = length(sn.sp.p - ray_o);
         }
         if (step == SHIFT_STEP_LAST_BSDF) {
+            if (found && manifold_coverage_covers(cov, sn.shape_flags)) break;
             vec3 Le = emitter_hit_radiance(ray_d, found, sn);
             if (!delta && restir_reconnectable(cfg, n, rough_j, true, dist)) break;
             float light_pdf = emitter_hit_light_pdf(sh.sp.p, ray_d, found, hit.prim, sn);

@@ -27,6 +27,11 @@ struct RestirSettings {
     uint mis_heuristic;      // NEE/BSDF MIS inside a path (MIS_HEURISTIC_*)
     uint area;               // Area ReSTIR: film and lens samples belong to the path sample
                              // (RESTIR_AREA), and with RESTIR_AREA_TIME the shutter time too
+    // > 0: paths a caustic estimator produces are left out (manifold/coverage.glsl: chains of up
+    // to covered_max_chain specular vertices after a receiver at most covered_depth deep), so
+    // that ReSTIR PT composes with it without counting them twice. 0: every path.
+    uint covered_max_chain;
+    uint covered_depth;
 };
 
 const uint RESTIR_AREA = 1u;
