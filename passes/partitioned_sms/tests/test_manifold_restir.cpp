@@ -100,11 +100,13 @@ uint32_t seedBase() {
 }
 constexpr int kFrames = 8;
 
-// graphFile's last reuse pass (`stage`) against PT (full image) and SMS (caustic), at the
-// same frame times. A large trial cap and 1024 presamples (the prior's tails, test_psms.cpp).
-// The full image leaves out the pixels that see the emitter directly (directEmitterPixels).
+// graphFile's last reuse pass (`stage`) against PT (full image: stage.color, or colorPort) and
+// SMS (caustic: stage.caustic), at the same frame times. A large trial cap and 1024 presamples
+// (the prior's tails, test_psms.cpp). The full image leaves out the pixels that see the emitter
+// directly (directEmitterPixels).
 Agreement compareReuse(const std::string& sceneFile, const std::string& graphFile,
-                       const std::string& stage, const json& overrides, float dt, int sequences) {
+                       const std::string& stage, const json& overrides, float dt, int sequences,
+                       const std::string& colorPort = "") {
     if (const char* k = std::getenv("LOOM_PSMS_FRAME_SCALE"))
         sequences *= std::max(1, std::atoi(k));
     auto scene = scene::loadScene(sourcePath(sceneFile));
@@ -113,7 +115,8 @@ Agreement compareReuse(const std::string& sceneFile, const std::string& graphFil
     for (auto& [k, v] : overrides.items()) o[k] = v;
     auto skip = directEmitterPixels(scene, kFrames, dt, kSize);
     auto reuse =
-        sequencePorts(loadGraph(graphFile, o), scene, {stage + ".color", stage + ".caustic"},
+        sequencePorts(loadGraph(graphFile, o), scene,
+                      {colorPort.empty() ? stage + ".color" : colorPort, stage + ".caustic"},
                       sequences, kFrames, dt, kSize, seedBase(), &skip);
     // References per scene, camera motion and sequence count.
     static std::map<std::string, std::pair<RegionStats, RegionStats>> references;
@@ -205,6 +208,21 @@ TEST(ManifoldReSTIR, UnbiasedOnTheCurvedMirrorStaticAndMovingCamera) {
         EXPECT_LT(a.zPt, 3.0) << "dt " << dt;
         EXPECT_LT(a.zSms, 3.0) << "dt " << dt;
     }
+}
+
+// The full image with reuse everywhere (graphs/psms_restir_pt.json): ReSTIR PT leaves out the
+// paths psms covers (ReSTIRPTInitial.coveredMaxChain, in its candidates and in every shift's
+// replay) and the reused caustic is added. ReSTIR PT keeping the covered paths counts the
+// caustic twice, which the same comparison must see.
+TEST(ManifoldReSTIR, FullImageWithReSTIRPTUnbiasedMovingCamera) {
+    // 24 sequences (CI time): at 48, |z| 1.17 against PT and 1.65 against SMS; twice, 10.4.
+    auto a = compareReuse("scenes/curved_mirror.json", "psms_restir_pt.json", "causticSpatial", {},
+                          3.0f, 24, "full.output");
+    EXPECT_LT(a.zPt, 3.0);
+    EXPECT_LT(a.zSms, 3.0);
+    auto twice = compareReuse("scenes/curved_mirror.json", "psms_restir_pt.json", "causticSpatial",
+                              {{"initial.coveredMaxChain", 0}}, 3.0f, 24, "full.output");
+    EXPECT_GT(twice.zPt, 4.5) << "ReSTIR PT counting the caustic twice went unseen";
 }
 
 TEST(ManifoldReSTIR, UnbiasedThroughTheWavySlabMovingCamera) {
