@@ -37,7 +37,7 @@
 -- one's rays would buy (relMSE ~ 1/spp), a proxy for GPU time where BVH traversal dominates.
 --
 -- Arguments: scenes (comma list; missing files are skipped), cameras (static,still,moving), width,
--- height, budget_ms, steps, move_frames, move_degrees, move (swing, dolly), move_dolly,
+-- height, budget_ms, steps, move_frames, move_degrees, move (swing, dolly), move_dolly, move_end,
 -- move_zoom, shutter, repeats, seed, ref_frames, ref_spp,
 -- ref_bounces (the estimators' maxBounces, 9), trim, configs, out. Scenes are looked up as
 -- given, then in the Loom source tree (so ../shared/scenes/... works from the repository root).
@@ -54,6 +54,13 @@ local move_degrees = loom.arg("move_degrees", 10.0)
 -- move_dolly of the distance, forward motion opens holes) and zoom in (fov from move_zoom x fov).
 local move = loom.arg("move", "swing")
 local move_dolly, move_zoom = loom.arg("move_dolly", 0.15), loom.arg("move_zoom", 1.15)
+-- move_end = scene: every move ends on the scene camera (the reference's pose). ahead: the move
+-- starts at the scene camera and ends move_dolly of the way to its target, where the reference,
+-- the static and the still renderers look from too: forward motion in scenes with a wall right
+-- behind the camera (the staircase).
+local move_end = loom.arg("move_end", "scene")
+if move_end ~= "scene" and move_end ~= "ahead" then error("move_end: expected scene or ahead") end
+local end_pose = nil  -- per scene, with move_end = ahead
 -- shutter=OPEN,CLOSE (frames): every renderer's camera shutter, and a reference that samples it
 -- (PathTracer's motionBlur, on by default): for estimators with motion blur.
 local shutter = loom.arg("shutter", {})
@@ -105,6 +112,7 @@ local function renderer(cfg, scene, extra)
   local r = loom.renderer{graph = cfg.graph, scene = scene, width = width, height = height,
                           seed = seed, params = params}
   if shutter then r:shutter(shutter[1], shutter[2]) end
+  if end_pose then r:camera(end_pose) end
   return r
 end
 
@@ -123,7 +131,12 @@ local function swing_path(cam, path)
     local kxv = {k[2] * v[3] - k[3] * v[2], k[3] * v[1] - k[1] * v[3], k[1] * v[2] - k[2] * v[1]}
     local kdv = k[1] * v[1] + k[2] * v[2] + k[3] * v[3]
     local origin = {}
-    local back = (move == "dolly" and i == 1) and 1 + move_dolly or 1
+    -- The start: move_dolly further back (ending on the scene camera), or back at the scene
+    -- camera (move_end = ahead: cam is the end pose, move_dolly of the way to the target).
+    local back = 1
+    if move == "dolly" and i == 1 then
+      back = move_end == "ahead" and 1 / (1 - move_dolly) or 1 + move_dolly
+    end
     for j = 1, 3 do origin[j] = t[j] + back * (v[j] * c + kxv[j] * s + k[j] * kdv * (1 - c)) end
     local fov = (move == "dolly" and i == 1) and math.min(170, cam.fov * move_zoom) or cam.fov
     keys[i] = {time = (i - 1) * (move_frames - 1), origin = origin, target = t, up = u,
@@ -141,14 +154,26 @@ for _, scene_arg in ipairs(scenes) do
   end
   do
     local name = stem_of(scene)
-    local ref = util.reference{scene = scene, width = width, height = height,
+    end_pose = nil
+    if move_end == "ahead" then
+      local probe = loom.renderer{graph = "graphs/pt.json", scene = scene, width = 8, height = 8}
+      local c = probe:camera()
+      probe:close()
+      local o, t = c.origin, c.target
+      end_pose = {origin = {o[1] + move_dolly * (t[1] - o[1]), o[2] + move_dolly * (t[2] - o[2]),
+                            o[3] + move_dolly * (t[3] - o[3])},
+                  target = t, up = c.up, fov = c.fov}
+    end
+    local ref = util.reference{scene = scene, width = width, height = height, camera = end_pose,
                                frames = ref_frames, spp = ref_spp, shutter = shutter,
                                params = {["pt.maxBounces"] = ref_bounces},
-                               path = string.format("out/reference/%s_%dx%d_%dx%dspp_b%d%s.exr",
+                               path = string.format("out/reference/%s_%dx%d_%dx%dspp_b%d%s%s.exr",
                                                     name, width, height, ref_frames, ref_spp,
                                                     ref_bounces, shutter and string.format(
                                                         "_shutter%g-%g", shutter[1], shutter[2])
-                                                        or "")}
+                                                        or "",
+                                                    end_pose and string.format("_ahead%g",
+                                                        move_dolly) or "")}
     local ms_per_frame, pass_ms = {}, {}
     local static_series = {}
     local want = {}

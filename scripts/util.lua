@@ -32,6 +32,7 @@ end
 -- `opts.params` ({["pass.param"] = value}) are set on the reference renderer (e.g. maxBounces);
 -- give such references their own `opts.path`. `opts.shutter` ({open, close}, frames) sets the
 -- camera's shutter (with params["pt.motionBlur"] = true: a motion-blurred reference).
+-- `opts.camera` ({origin, target, up, fov}) replaces the scene camera and its path.
 function util.reference(opts)
   local path = opts.path
   if path == nil then
@@ -49,6 +50,7 @@ function util.reference(opts)
   local r = loom.renderer{graph = opts.graph or "graphs/pt_reference.json", scene = opts.scene,
                           width = opts.width, height = opts.height, seed = opts.seed or 1000}
   if opts.shutter then r:shutter(opts.shutter[1], opts.shutter[2]) end
+  if opts.camera then r:camera(opts.camera) end  -- {origin, target, up, fov}: replaces the path
   if opts.spp and opts.spp > 0 then r:set("pt.samplesPerPixel", opts.spp) end
   for key, value in pairs(opts.params or {}) do r:set(key, value) end
   local gpu_ms = 0
