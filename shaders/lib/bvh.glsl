@@ -115,10 +115,10 @@ void bvh_load_triangle(uint index, out uvec4 r0, out uvec4 r1, out uvec4 r2, out
 // A moving triangle at bvh_time: vertices on the segments from its record to its shutter-close
 // twin, in the form a + t (b - a) that scene.glsl's surface points use (exact at t = 0).
 // Apart from the static test, so that static scenes keep that test's code and registers.
-bool bvh_intersect_moving(uint index, vec3 o, vec3 d, float tmin, float tmax, uint mask,
-                          inout Hit hit) {
-    uvec4 r0, r1, r2, r3, m0, m1, m2, m3;
-    bvh_load_triangle(index, r0, r1, r2, r3);
+// r0..r2: the record's words, already loaded.
+bool bvh_intersect_moving(uint index, uvec4 r0, uvec4 r1, uvec4 r2, vec3 o, vec3 d, float tmin,
+                          float tmax, uint mask, inout Hit hit) {
+    uvec4 m0, m1, m2, m3;
     bvh_load_triangle(index + bvh_motion_offset, m0, m1, m2, m3);
     vec3 v0 = uintBitsToFloat(r0.xyz), c0 = uintBitsToFloat(m0.xyz);
     vec3 p1 = v0 + uintBitsToFloat(r1.xyz), p2 = v0 + uintBitsToFloat(r2.xyz);
@@ -136,7 +136,7 @@ bool bvh_intersect_triangle(uint index, vec3 o, vec3 d, float tmin, float tmax, 
     bvh_load_triangle(index, r0, r1, r2, r3);
 #ifdef LOOM_SHAPE_MOTION_BLUR  // only while shapes move over the shutter (Renderer)
     if ((r1.w & 0x100u) != 0u && bvh_time != 0.0)
-        return bvh_intersect_moving(index, o, d, tmin, tmax, mask, hit);
+        return bvh_intersect_moving(index, r0, r1, r2, o, d, tmin, tmax, mask, hit);
 #endif
     return bvh_intersect_plane(uintBitsToFloat(r0.xyz), uintBitsToFloat(r1.xyz),
                                uintBitsToFloat(r2.xyz), uintBitsToFloat(r3.xyz), r0.w, r1.w, o, d,
