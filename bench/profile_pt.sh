@@ -24,14 +24,14 @@ export LP_NUM_THREADS=${THREADS:-2}
 PATH_GLSL=lib/integrator/path.glsl
 # name|file|perl regex|replacement
 VARIANTS=(
-  "closest_x2|$PATH_GLSL|found = trace_closest\(o, d, 0\.0, 1e30, BVH_MASK_ALL, hit\);|{ Hit h2; bool f2 = trace_closest(o, d, 0.0, 2e30, BVH_MASK_ALL, h2); found = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit); if (f2 && h2.t < 0.0) { found = true; hit = h2; } }"
-  "shadow_x2|$PATH_GLSL|if \(!trace_any\(nee\.ray\.o, nee\.ray\.d, 0\.0, nee\.ray\.tmax, BVH_MASK_ALL\)\)|if ((uint(trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) & (uint(trace_any(nee.ray.o, nee.ray.d, -1.0, nee.ray.tmax, BVH_MASK_ALL)) | 1u)) == 0u)"
+  "closest_x2|$PATH_GLSL|found = trace_closest\(st\.o, st\.d, 0\.0, 1e30, BVH_MASK_ALL, hit\);|{ Hit h2; bool f2 = trace_closest(st.o, st.d, 0.0, 2e30, BVH_MASK_ALL, h2); found = trace_closest(st.o, st.d, 0.0, 1e30, BVH_MASK_ALL, hit); if (f2 && h2.t < 0.0) { found = true; hit = h2; } }"
+  "shadow_x2|$PATH_GLSL|if \(!trace_any\(shadow\.ray\.o, shadow\.ray\.d, 0\.0, shadow\.ray\.tmax, BVH_MASK_ALL\)\)|if ((uint(trace_any(shadow.ray.o, shadow.ray.d, 0.0, shadow.ray.tmax, BVH_MASK_ALL)) & (uint(trace_any(shadow.ray.o, shadow.ray.d, -1.0, shadow.ray.tmax, BVH_MASK_ALL)) | 1u)) == 0u)"
   "shading_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { Hit h3 = hit; h3.bary *= 0.999; ShadingPoint s3 = shading_point(h3); sh = shading_point(hit); if (s3.n.x > 2.0) sh = s3; }"
   "surface_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { SurfacePoint sp3 = surface_point(hit.prim, hit.bary * 0.999); sh = shading_point(hit); if (sp3.p.x > 1e30) sh.sp = sp3; }"
-  "material_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { sh = shading_point(hit); Material m3 = scene_materials[scene_shapes[sh.sp.shape].material + (depth > 1000u ? 1u : 0u)]; if (m3.diffuse.x < -1.0) sh.mat = m3; }"
+  "material_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { sh = shading_point(hit); Material m3 = scene_materials[scene_shapes[sh.sp.shape].material + (st.depth > 1000u ? 1u : 0u)]; if (m3.diffuse.x < -1.0) sh.mat = m3; }"
   "nee_x2|$PATH_GLSL|NeeSample nee = nee_sample\(sh, wo, u_light, ps\.mis, ps\.mis_heuristic\);|NeeSample nee2 = nee_sample(sh, wo, u_light.yxz, ps.mis, ps.mis_heuristic); NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic); if (nee2.value.x < -1.0) nee = nee2;"
   "bsdf_x2|$PATH_GLSL|BsdfSample bs = bsdf_sample\(sh\.mat, wo, u_bsdf\);|BsdfSample bs2 = bsdf_sample(sh.mat, wo, u_bsdf.yzx); BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf); if (bs2.pdf < -1.0) bs = bs2;"
-  "emission_x2|$PATH_GLSL|vec3 Le = emitter_hit_radiance\(d, found, sh\);|vec3 Le = emitter_hit_radiance(d, found, sh); float lpdf2 = emitter_hit_light_pdf(prev_p, -d, found, hit.prim, sh); if (lpdf2 < -1.0) Le = vec3(lpdf2);"
+  "emission_x2|$PATH_GLSL|vec3 Le = emitter_hit_radiance\(st\.d, found, sh\);|vec3 Le = emitter_hit_radiance(st.d, found, sh); float lpdf2 = emitter_hit_light_pdf(st.prev_p, -st.d, found, hit.prim, sh); if (lpdf2 < -1.0) Le = vec3(lpdf2);"
 )
 
 make_variant() {  # name file regex replacement -> prints the shader dir
@@ -73,16 +73,15 @@ done
 # Lane use of the path loop: iterations per lane and per SIMD batch.
 lanes=$OUT/shaders-lanes
 make_variant lanes "" "" "" >/dev/null
-RE='for \(uint depth = 0u;; \+\+depth\) \{' REP='for (uint depth = 0u;; ++depth) { ++prof_path_iters;' \
+RE='for \(;;\) \{' REP='for (;;) { ++prof_path_iters;' \
   perl -0pi -e 's/$ENV{RE}/$ENV{REP}/ or die "lanes: loop not found\n"' "$lanes/$PATH_GLSL"
 RE='struct PathSettings \{' REP='uint prof_path_iters = 0u;
 struct PathSettings {' perl -0pi -e 's/$ENV{RE}/$ENV{REP}/ or die "lanes: PathSettings not found\n"' "$lanes/$PATH_GLSL"
-RE='(\#include "lib/rng.glsl"\n)' REP='$1#extension GL_KHR_shader_subgroup_arithmetic : require
-' perl -0pi -e 's/$ENV{RE}/$1#extension GL_KHR_shader_subgroup_arithmetic : require\n/ or die "lanes: include not found\n"' \
+RE='(\#version 460\n)' perl -0pi -e 's/$ENV{RE}/$1#extension GL_KHR_shader_subgroup_arithmetic : require\n/ or die "lanes: version not found\n"' \
   "$lanes/passes/path_tracer/path_tracer.comp"
-RE='(imageStore\(colorImage, ip, )[^;]*;' perl -0pi -e \
-  's/$ENV{RE}/$1vec4(float(prof_path_iters), float(subgroupMax(prof_path_iters)), float(gl_SubgroupSize), 1.0));/ or die "lanes: store not found\n"' \
-  "$lanes/passes/path_tracer/path_tracer.comp"
+RE='(imageStore\(colorImage, ip,)[^;]*;' perl -0pi -e \
+  's/$ENV{RE}/$1 vec4(float(prof_path_iters), float(subgroupMax(prof_path_iters)), float(gl_SubgroupSize), 1.0));/ or die "lanes: store not found\n"' \
+  "$lanes/passes/path_tracer/path_tracer_common.glsl"
 LOOM_SHADER_PATH=$lanes "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
   --frames 4 --set pt.maxBounces="$BOUNCES" --quiet --output accum.output="$OUT/lanes.exr" >"$OUT/lanes.log" 2>&1 \
   || { echo "profile_pt.sh: lanes render failed: $(tail -3 "$OUT/lanes.log")" >&2; exit 1; }

@@ -34,11 +34,41 @@ struct PathRadiance {
     Hit first;      // that hit
 };
 
-// The path from ray (o, d). With `given`, the first hit is first_hit (found: first_found)
-// instead of a trace (a GBuffer's V-buffer). Random numbers: per bounce, 3 for light sampling,
-// 3 for the BSDF, 1 for Russian roulette, in that order.
-PathRadiance path_trace(vec3 o, vec3 d, bool given, Hit first_hit, bool first_found,
-                        PathSettings ps, inout Rng rng) {
+// What a path carries from one vertex to the next: the ray to trace, the throughput and what
+// MIS and SMS coverage need of the vertex before. Schedules differ only in where this lives:
+// registers for path_trace's loop, a buffer between the dispatches of PathTracer's wavefront.
+struct PathVertexState {
+    vec3 o, d;        // the ray to trace next
+    vec3 beta;        // throughput
+    float prev_pdf;   // solid-angle pdf of the BSDF sample that led here
+    bool prev_delta;  // that sample was delta (camera rays count as delta: no MIS at the first hit)
+    vec3 prev_p;
+    ManifoldCoverage cov;
+    uint depth;       // scattering events so far
+};
+
+// A light sample taken at a vertex: what it adds if its shadow ray is unoccluded.
+struct PendingShadow {
+    ShadowRay ray;
+    vec3 c;
+    bool direct;  // taken at the primary hit: also one-bounce lighting
+    bool valid;   // false: nothing to trace
+};
+
+PathVertexState path_start(vec3 o, vec3 d) {
+    PathVertexState st;
+    st.o = o;
+    st.d = d;
+    st.beta = vec3(1.0);
+    st.prev_pdf = 0.0;
+    st.prev_delta = true;
+    st.prev_p = o;
+    st.cov = manifold_coverage_none();
+    st.depth = 0u;
+    return st;
+}
+
+PathRadiance path_radiance_none() {
     PathRadiance r;
     r.L = vec3(0.0);
     r.L_direct = vec3(0.0);
@@ -46,87 +76,123 @@ PathRadiance path_trace(vec3 o, vec3 d, bool given, Hit first_hit, bool first_fo
     r.normal = vec3(0.0);
     r.rays = 0u;
     r.found = false;
-    vec3 beta = vec3(1.0);
-    float prev_pdf = 0.0;     // solid-angle pdf of the BSDF sample that led here
-    bool prev_delta = true;   // camera rays count as delta (no MIS at the first hit)
-    vec3 prev_p = o;
-    ManifoldCoverage cov = manifold_coverage_none();
-    for (uint depth = 0u;; ++depth) {
+    r.first.t = 0.0;
+    r.first.prim = ~0u;
+    r.first.bary = vec2(0.0);
+    return r;
+}
+
+// The vertex that the ray (st.o, st.d) found (found: hit, else the environment): emission,
+// MIS-weighted against light sampling; a light sample (returned in `shadow`, for the caller to
+// trace and add with path_add_shadow); a BSDF sample that sets up the next ray; Russian
+// roulette. Returns false when the path ends here (its light sample may still be pending).
+// Random numbers: 3 for light sampling, 3 for the BSDF, 1 for Russian roulette, in that order.
+bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit hit,
+                 PathSettings ps, inout Rng rng, out PendingShadow shadow) {
+    shadow.valid = false;
+    shadow.direct = st.depth == 0u;
+    shadow.c = vec3(0.0);
+    shadow.ray.o = vec3(0.0);
+    shadow.ray.d = vec3(0.0);
+    shadow.ray.tmax = 0.0;
+    if (st.depth == 0u) {
+        r.found = found;
+        r.first = hit;
+    }
+    ShadingPoint sh;
+    if (found) sh = shading_point(hit);
+    // Emission hit by BSDF sampling (or seen directly), or the environment on a miss,
+    // MIS-weighted against light sampling.
+    vec3 Le = emitter_hit_radiance(st.d, found, sh);
+    if (any(greaterThan(Le, vec3(0.0))) &&
+        !(found && manifold_coverage_covers(st.cov, sh.shape_flags))) {
+        float w = 1.0;
+        if (!st.prev_delta && ps.mis)
+            w = mis_weight(st.prev_pdf,
+                           emitter_hit_light_pdf(st.prev_p, st.d, found, hit.prim, sh),
+                           ps.mis_heuristic);
+        else if (!st.prev_delta && ps.nee)
+            w = 0.0;
+        vec3 c = st.beta * Le * w;
+        r.L += c;
+        if (st.depth <= 1u) r.L_direct += c;
+    }
+    if (!found) return false;
+    if (st.depth == 0u) {
+        r.albedo = sh.mat.diffuse.rgb;
+        r.normal = sh.n;
+    }
+    if (st.depth >= ps.max_bounces) return false;
+
+    vec3 wo = shading_to_local(sh, -st.d);
+    uint flags = bsdf_flags(sh.mat);
+    bool has_smooth = (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
+
+    // Next-event estimation.
+    vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
+    if (has_smooth && ps.nee) {
+        NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic);
+        if (nee.valid) {
+            shadow.ray = nee.ray;
+            shadow.c = st.beta * nee.value;
+            shadow.valid = true;
+        }
+    }
+
+    // BSDF sampling.
+    vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
+    BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
+    if (!bsdf_sample_valid(bs)) return false;
+    st.cov = manifold_coverage_step(st.cov, sh, st.depth, ps.covered_depth,
+                                    ps.covered_max_chain, bs.flags);
+    st.beta *= bsdf_sample_weight(bs);
+    st.prev_delta = (bs.flags & BSDF_DELTA) != 0u;
+    st.prev_pdf = bs.pdf;
+    st.prev_p = sh.sp.p;
+    st.d = shading_to_world(sh, bs.wi);
+    st.o = offset_ray_origin(sh.sp.p, sh.sp.ng, st.d);
+
+    // Russian roulette on the throughput (unbiased: survivors are reweighted).
+    if (st.depth + 1u >= ps.rr_depth) {
+        float q = min(max(st.beta.r, max(st.beta.g, st.beta.b)), 0.95);
+        if (rng_next(rng) >= q) return false;
+        st.beta /= q;
+    }
+    if (all(equal(st.beta, vec3(0.0)))) return false;
+    ++st.depth;
+    return true;
+}
+
+// A light sample whose shadow ray was unoccluded.
+void path_add_shadow(inout PathRadiance r, PendingShadow shadow) {
+    r.L += shadow.c;
+    if (shadow.direct) r.L_direct += shadow.c;
+}
+
+// The path from ray (o, d), all of it in this invocation. With `given`, the first hit is
+// first_hit (found: first_found) instead of a trace (a GBuffer's V-buffer).
+PathRadiance path_trace(vec3 o, vec3 d, bool given, Hit first_hit, bool first_found,
+                        PathSettings ps, inout Rng rng) {
+    PathRadiance r = path_radiance_none();
+    PathVertexState st = path_start(o, d);
+    for (;;) {
         Hit hit;
         bool found;
-        if (given && depth == 0u) {
+        if (given && st.depth == 0u) {
             hit = first_hit;
             found = first_found;
         } else {
             ++r.rays;
-            found = trace_closest(o, d, 0.0, 1e30, BVH_MASK_ALL, hit);
+            found = trace_closest(st.o, st.d, 0.0, 1e30, BVH_MASK_ALL, hit);
         }
-        if (depth == 0u) {
-            r.found = found;
-            r.first = hit;
+        PendingShadow shadow;
+        bool more = path_vertex(st, r, found, hit, ps, rng, shadow);
+        if (shadow.valid) {
+            ++r.rays;
+            if (!trace_any(shadow.ray.o, shadow.ray.d, 0.0, shadow.ray.tmax, BVH_MASK_ALL))
+                path_add_shadow(r, shadow);
         }
-        ShadingPoint sh;
-        if (found) sh = shading_point(hit);
-        // Emission hit by BSDF sampling (or seen directly), or the environment on a miss,
-        // MIS-weighted against light sampling.
-        vec3 Le = emitter_hit_radiance(d, found, sh);
-        if (any(greaterThan(Le, vec3(0.0))) &&
-            !(found && manifold_coverage_covers(cov, sh.shape_flags))) {
-            float w = 1.0;
-            if (!prev_delta && ps.mis)
-                w = mis_weight(prev_pdf, emitter_hit_light_pdf(prev_p, d, found, hit.prim, sh),
-                               ps.mis_heuristic);
-            else if (!prev_delta && ps.nee)
-                w = 0.0;
-            vec3 c = beta * Le * w;
-            r.L += c;
-            if (depth <= 1u) r.L_direct += c;
-        }
-        if (!found) break;
-        if (depth == 0u) {
-            r.albedo = sh.mat.diffuse.rgb;
-            r.normal = sh.n;
-        }
-        if (depth >= ps.max_bounces) break;
-
-        vec3 wo = shading_to_local(sh, -d);
-        uint flags = bsdf_flags(sh.mat);
-        bool has_smooth = (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
-
-        // Next-event estimation.
-        vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
-        if (has_smooth && ps.nee) {
-            NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic);
-            if (nee.valid) {
-                ++r.rays;
-                if (!trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) {
-                    vec3 c = beta * nee.value;
-                    r.L += c;
-                    if (depth == 0u) r.L_direct += c;
-                }
-            }
-        }
-
-        // BSDF sampling.
-        vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
-        BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
-        if (!bsdf_sample_valid(bs)) break;
-        cov = manifold_coverage_step(cov, sh, depth, ps.covered_depth, ps.covered_max_chain,
-                                     bs.flags);
-        beta *= bsdf_sample_weight(bs);
-        prev_delta = (bs.flags & BSDF_DELTA) != 0u;
-        prev_pdf = bs.pdf;
-        prev_p = sh.sp.p;
-        d = shading_to_world(sh, bs.wi);
-        o = offset_ray_origin(sh.sp.p, sh.sp.ng, d);
-
-        // Russian roulette on the throughput (unbiased: survivors are reweighted).
-        if (depth + 1u >= ps.rr_depth) {
-            float q = min(max(beta.r, max(beta.g, beta.b)), 0.95);
-            if (rng_next(rng) >= q) break;
-            beta /= q;
-        }
-        if (all(equal(beta, vec3(0.0)))) break;
+        if (!more) break;
     }
     return r;
 }
