@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "core/gpu/CounterBuffer.h"
+#include "core/gpu/WorkList.h"
 #include "core/graph/KernelParams.h"
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
@@ -37,6 +38,15 @@ public:
             .doc("Veach 1997 Sec. 9.2");
         r.param("motionBlur", true).doc("sample time over the shutter (camera and moving shapes)");
         r.param("clamp", 0.0).min(0).doc("clamp path radiance (0 = off; biased, previews only)");
+        r.paramEnum("schedule", "megakernel", {"megakernel", "wavefront"})
+            .doc(
+                "one invocation runs whole paths, or paths advance a vertex per dispatch over "
+                "compacted lists, shadow rays in dispatches of their own (same image)");
+        r.param("wavefrontDepth", 8)
+            .range(0, 64)
+            .doc(
+                "wavefront: bounce dispatches before the last one runs the paths left to their "
+                "end");
     }
     void execute(ExecuteContext& ctx) override {
         const auto& scene = ctx.scene();
@@ -46,8 +56,6 @@ public:
             for (auto& c : name) c = char(std::toupper(c));
             defines[name] = std::string(ctx.has(port) ? "1" : "0");
         }
-        auto pipeline =
-            compileKernel(*this, ctx.shaders(), "passes/path_tracer/path_tracer.comp", defines);
         auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         scene.bind(b);
@@ -65,14 +73,77 @@ public:
         // lavapipe stops a loop after 65535 iterations per invocation (bvh.glsl): split the
         // frame's samples so that a dispatch stays far below that, at 2 rays per bounce and up
         // to kStepsPerRay traversal steps per ray; frameCompleted checks what actually ran.
+        // Each chunk has its own random stream, in both schedules.
         constexpr uint32_t kStepsPerRay = 64, kStepBudget = 32768;
         uint32_t perDispatch = std::max(1u, kStepBudget / (2 * (maxBounces + 1) * kStepsPerRay));
+        if (param<std::string>("schedule") == "wavefront") {
+            executeWavefront(ctx, b, defines, spp, perDispatch);
+            return;
+        }
+        auto pipeline =
+            compileKernel(*this, ctx.shaders(), "passes/path_tracer/path_tracer.comp", defines);
         for (uint32_t base = 0; base < spp; base += perDispatch) {
             if (base > 0) ctx.cmd().barrier();
             KernelParams(*this, *pipeline, ctx)
                 .set("dispatchSamples", std::min(perDispatch, spp - base))
                 .set("sampleBase", base)
                 .dispatch(ctx, b, ctx.width(), ctx.height());
+        }
+    }
+    // The wavefront schedule (path_tracer_wavefront.comp): per sample, a generate dispatch,
+    // bounce and shadow dispatches over the lists the kernels compact, a finish dispatch.
+    void executeWavefront(ExecuteContext& ctx, gpu::Bindings& b, const ShaderDefines& defines,
+                          uint32_t spp, uint32_t perDispatch) {
+        auto stage = [&](int s) {
+            ShaderDefines d = defines;
+            d["PT_STAGE"] = std::to_string(s);
+            return compileKernel(*this, ctx.shaders(),
+                                 "passes/path_tracer/path_tracer_wavefront.comp", d);
+        };
+        auto generate = stage(0), bounce = stage(1), shadow = stage(2), finish = stage(3);
+        uint64_t pixels = uint64_t(ctx.width()) * ctx.height();
+        if (mWavefrontPixels != pixels) {
+            constexpr uint64_t kPathBytes = 16 * 16;  // WavefrontPath
+            mPaths = ctx.gpu().createBuffer(pixels * kPathBytes, "WavefrontPaths");
+            mShadows = ctx.gpu().createBuffer(48 + 2 * 4 * pixels, "WavefrontShadows");
+            mItems = ctx.gpu().createBuffer(8 * pixels, "WorkListItems");
+            mWavefrontPixels = pixels;
+        }
+        b.set("WavefrontPaths", mPaths).set("WavefrontShadows", mShadows);
+        auto& cmd = ctx.cmd();
+        mWork.reset(ctx.gpu(), cmd);  // creates its buffers on first use, before binding them
+        mWork.bind(b, mItems);
+        uint32_t maxBounces = uint32_t(param<int>("maxBounces"));
+        // Bounce dispatch k sees paths of depth k; the last one runs them to their end.
+        uint32_t rounds = std::min(uint32_t(param<int>("wavefrontDepth")), maxBounces);
+        for (uint32_t base = 0; base < spp; base += perDispatch) {
+            uint32_t samples = std::min(perDispatch, spp - base);
+            for (uint32_t s = 0; s < samples; ++s) {
+                auto params = [&](gpu::ComputePipeline& p, uint32_t round) {
+                    KernelParams k(*this, p, ctx);
+                    k.set("dispatchSamples", samples)
+                        .set("sampleBase", base)
+                        .set("sampleIndex", s)
+                        .set("bounceRound", round)
+                        .set("finishPaths", uint32_t(round == rounds));
+                    return k;
+                };
+                if (base + s > 0) {
+                    cmd.barrier();
+                    mWork.reset(ctx.gpu(), cmd);
+                }
+                params(*generate, 0).dispatch(ctx, b, ctx.width(), ctx.height());
+                for (uint32_t k = 0; k <= rounds; ++k) {
+                    cmd.barrier();
+                    params(*bounce, k)
+                        .dispatchIndirect(ctx, b, mWork.args(), gpu::WorkList::argsOffset(int(k)));
+                    if (k == rounds) break;
+                    cmd.barrier();
+                    params(*shadow, k).dispatchIndirect(ctx, b, *mShadows, 16 + 16 * (k % 2));
+                }
+                cmd.barrier();
+                params(*finish, rounds).dispatch(ctx, b, ctx.width(), ctx.height());
+            }
         }
     }
     void frameCompleted(gpu::Context& gpu) override {
@@ -93,6 +164,9 @@ public:
 
 private:
     gpu::CounterBuffer<2> mRayCounter{"RayCounter"};
+    gpu::WorkList mWork;
+    std::shared_ptr<gpu::Buffer> mPaths, mShadows, mItems;
+    uint64_t mWavefrontPixels = 0;
     bool mWarnedLoopLimit = false;
 };
 

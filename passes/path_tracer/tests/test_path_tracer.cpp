@@ -958,3 +958,90 @@ TEST(PathTracer, ShutterChangedAtRunTimeRecompilesMotionBlur) {
     EXPECT_LT(maxZ(sharpAgain, sharp), 4.5) << "closing it again";
     EXPECT_GT(maxZ(sharp, blurred), 4.5) << "the blur is not visible to the test";
 }
+
+// The wavefront schedule (path_tracer_wavefront.comp) runs the megakernel's path_vertex on the
+// same random numbers in the same order, so it renders the same image: bit for bit on lavapipe,
+// and to the last bits of float elsewhere (a compiler may contract differently per kernel).
+// Cases cover what the wavefront keeps between dispatches: V-buffer first hits (graphs/pt.json),
+// sample chunks with their own streams (4 spp at 64 bounces = chunks of 3 + 1), each strategy,
+// a bounce list that runs empty (wavefrontDepth past every path), only the last dispatch
+// (depth 0), misses into an environment, moving shapes at each path's time, AOVs and clamp.
+TEST(PathTracer, WavefrontScheduleRendersTheMegakernelsImage) {
+    const std::string root = LOOM_SOURCE_DIR;
+    Scene cornell = loadScene(root + "/scenes/cornell_box.json");
+    Scene glossy = loadScene(root + "/bench/data/peer/glossy_env.json");
+    Scene moving = cornell;
+    for (Shape& shape : moving.shapes)
+        if (shape.name == "tall_box")
+            shape.path = {{0.0f, glm::vec3(0.0f)}, {1.0f, glm::vec3(0.5f, 0.0f, 0.2f)}};
+    moving.camera.shutterOpen = 0.0f;
+    moving.camera.shutterClose = 1.0f;
+    struct Case {
+        const char* name;
+        const Scene* scene;
+        json params;
+        bool viaGBuffer;
+    };
+    const std::vector<Case> cases = {
+        {"graphs/pt.json, 4 spp in chunks of 3 + 1, 64 bounces",
+         &cornell,
+         {{"samplesPerPixel", 4}, {"maxBounces", 64}},
+         true},
+        {"strategy bsdf, depth 2",
+         &cornell,
+         {{"strategy", "bsdf"}, {"maxBounces", 6}, {"wavefrontDepth", 2}},
+         false},
+        {"strategy nee, balance heuristic, clamp",
+         &cornell,
+         {{"strategy", "nee"}, {"misHeuristic", "balance"}, {"clamp", 0.5}},
+         false},
+        {"depth 0 (all in the last dispatch)", &cornell, {{"wavefrontDepth", 0}}, false},
+        {"depth 64 (lists run empty: paths escape)",
+         &glossy,
+         {{"samplesPerPixel", 2}, {"maxBounces", 64}, {"wavefrontDepth", 64}},
+         false},
+        {"environment and glossy spheres", &glossy, {{"maxBounces", 16}}, false},
+        {"moving shapes, motion blur", &moving, {{"samplesPerPixel", 2}}, true},
+    };
+    const std::vector<std::string> outputs = {"pt.color", "pt.albedo", "pt.direct", "pt.indirect"};
+    for (const Case& c : cases) {
+        std::vector<std::vector<ImageData>> images;
+        for (const char* schedule : {"megakernel", "wavefront"}) {
+            json params = c.params;
+            params["schedule"] = schedule;
+            json g = json::parse(test::readFile(root + "/graphs/pt.json"));
+            if (!c.viaGBuffer) {
+                g["passes"].erase(0);
+                g["edges"] = json::array();
+                params["motionBlur"] = true;
+            }
+            for (auto& p : g["passes"])
+                if (p["name"] == "pt") p["params"] = params;
+            g["outputs"] = outputs;
+            Renderer r(sharedGpu(), RenderGraph::parse(g.dump(), "graphs/pt.json"), 24, 20, 17);
+            r.setScene(*c.scene);
+            std::vector<ImageData> frames;
+            for (int f = 0; f < 2; ++f) {
+                r.frame();
+                for (const auto& o : outputs) frames.push_back(r.readOutput(o));
+            }
+            images.push_back(std::move(frames));
+        }
+        size_t values = 0, identical = 0, outside = 0;
+        double sum = 0;
+        for (size_t k = 0; k < images[0].size(); ++k) {
+            const auto &a = images[0][k].pixels, &b = images[1][k].pixels;
+            ASSERT_EQ(a.size(), b.size());
+            for (size_t i = 0; i < a.size(); ++i) {
+                ++values;
+                sum += a[i];
+                identical += a[i] == b[i];
+                outside += !(std::abs(a[i] - b[i]) <= 1e-5f * std::max(1.0f, std::abs(a[i])));
+            }
+        }
+        std::printf("%s: %zu of %zu values identical, %zu beyond 1e-5 (mean %.5f)\n", c.name,
+                    identical, values, outside, sum / double(values));
+        EXPECT_EQ(outside, 0u) << c.name;
+        EXPECT_GT(sum, 0.0) << c.name << ": a black image proves nothing";
+    }
+}
