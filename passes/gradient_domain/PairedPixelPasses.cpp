@@ -154,25 +154,18 @@ public:
         mPipeline = compileKernel(*this, shaders, "passes/gradient_domain/paired_spatial.comp");
     }
     void execute(ExecuteContext& ctx) override {
-        int rounds = param<int>("rounds");
-        auto in = ctx.buffer("pairs"), out = ctx.buffer("pairsOut");
-        auto scratch = ctx.scratchBuffer("pingPong");
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
-        for (int round = 0; round < rounds; ++round) {
-            auto dst = (rounds - 1 - round) % 2 == 0 ? out : scratch;
-            gpu::Bindings b;
-            ctx.scene().bind(b);
-            b.set("PairsIn", in)
-                .set("PairsOut", dst)
-                .set("PrimaryIn", ctx.buffer("primary"))
-                .set("FeaturesIn", ctx.buffer("features"))
-                .set("RestirCounters", counters);
-            KernelParams(*this, *mPipeline, ctx)
-                .set("round", uint32_t(round))
-                .dispatch(ctx, b, ctx.width(), ctx.height());
-            ctx.cmd().barrier();
-            in = dst;
-        }
+        restir::dispatchSpatialRounds(*this, *mPipeline, ctx, param<int>("rounds"),
+                                      ctx.buffer("pairs"), ctx.buffer("pairsOut"),
+                                      ctx.scratchBuffer("pingPong"),
+                                      [&](gpu::Bindings& b, const std::shared_ptr<gpu::Buffer>& src,
+                                          const std::shared_ptr<gpu::Buffer>& dst) {
+                                          b.set("PairsIn", src)
+                                              .set("PairsOut", dst)
+                                              .set("PrimaryIn", ctx.buffer("primary"))
+                                              .set("FeaturesIn", ctx.buffer("features"))
+                                              .set("RestirCounters", counters);
+                                      });
     }
 
 private:

@@ -70,4 +70,23 @@ gpu::Bindings temporalReuseBindings(ExecuteContext& ctx, ShiftCounters& counters
     return b;
 }
 
+void dispatchSpatialRounds(
+    const Pass& pass, const gpu::ComputePipeline& pipeline, ExecuteContext& ctx, int rounds,
+    std::shared_ptr<gpu::Buffer> in, const std::shared_ptr<gpu::Buffer>& out,
+    const std::shared_ptr<gpu::Buffer>& pingPong,
+    const std::function<void(gpu::Bindings&, const std::shared_ptr<gpu::Buffer>& src,
+                             const std::shared_ptr<gpu::Buffer>& dst)>& bind) {
+    for (int round = 0; round < rounds; ++round) {
+        auto dst = (rounds - 1 - round) % 2 == 0 ? out : pingPong;
+        gpu::Bindings b;
+        ctx.scene().bind(b);
+        bind(b, in, dst);
+        KernelParams(pass, pipeline, ctx)
+            .set("round", uint32_t(round))
+            .dispatch(ctx, b, ctx.width(), ctx.height());
+        ctx.cmd().barrier();
+        in = dst;
+    }
+}
+
 }  // namespace loom::restir

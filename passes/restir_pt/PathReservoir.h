@@ -1,6 +1,7 @@
 #pragma once
 // Host-side facts about the ReSTIR PT buffers shared by the ReSTIRPT* passes; the layouts are
 // defined in shaders/lib/restir/reservoir.glsl.
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -60,5 +61,16 @@ protected:
 // Binds the scene and reflectTemporalReuse's ports under the temporal kernels' block names, and
 // the shift counters (zeroed).
 gpu::Bindings temporalReuseBindings(ExecuteContext& ctx, ShiftCounters& counters);
+
+// Spatial reuse in `rounds` rounds, each reading the previous one's reservoirs: round r reads
+// `in` (r = 0) or round r - 1's output, and writes `out` or `pingPong` alternately so that the
+// last round writes `out`. bind(b, src, dst) adds the round's bindings to the scene's; each
+// round is one width x height dispatch of `pipeline` with its `round` member set.
+void dispatchSpatialRounds(
+    const Pass& pass, const gpu::ComputePipeline& pipeline, ExecuteContext& ctx, int rounds,
+    std::shared_ptr<gpu::Buffer> in, const std::shared_ptr<gpu::Buffer>& out,
+    const std::shared_ptr<gpu::Buffer>& pingPong,
+    const std::function<void(gpu::Bindings&, const std::shared_ptr<gpu::Buffer>& src,
+                             const std::shared_ptr<gpu::Buffer>& dst)>& bind);
 
 }  // namespace loom::restir

@@ -37,26 +37,17 @@ public:
         mPipeline = compileKernel(*this, shaders, "passes/restir_pt/spatial.comp");
     }
     void execute(ExecuteContext& ctx) override {
-        int rounds = param<int>("rounds");
-        auto in = ctx.buffer("reservoirs"), out = ctx.buffer("reservoirsOut");
-        auto scratch = ctx.scratchBuffer("pingPong");
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
-        for (int round = 0; round < rounds; ++round) {
-            // Ping-pong so that the last round writes the output.
-            bool toOut = (rounds - 1 - round) % 2 == 0;
-            auto dst = toOut ? out : scratch;
-            gpu::Bindings b;
-            ctx.scene().bind(b);
-            b.set("ReservoirsIn", in)
-                .set("ReservoirsOut", dst)
-                .set("PrimaryIn", ctx.buffer("primary"))
-                .set("RestirCounters", counters);
-            KernelParams(*this, *mPipeline, ctx)
-                .set("round", uint32_t(round))
-                .dispatch(ctx, b, ctx.width(), ctx.height());
-            ctx.cmd().barrier();
-            in = dst;
-        }
+        restir::dispatchSpatialRounds(*this, *mPipeline, ctx, param<int>("rounds"),
+                                      ctx.buffer("reservoirs"), ctx.buffer("reservoirsOut"),
+                                      ctx.scratchBuffer("pingPong"),
+                                      [&](gpu::Bindings& b, const std::shared_ptr<gpu::Buffer>& src,
+                                          const std::shared_ptr<gpu::Buffer>& dst) {
+                                          b.set("ReservoirsIn", src)
+                                              .set("ReservoirsOut", dst)
+                                              .set("PrimaryIn", ctx.buffer("primary"))
+                                              .set("RestirCounters", counters);
+                                      });
     }
     void frameCompleted(gpu::Context& gpu) override { mCounters.read(gpu); }
     std::map<std::string, double> stats() const override { return mCounters.stats(); }
