@@ -26,6 +26,11 @@
 //   workgroup 32 or 256 instead of 64                           +-1.5% (noise)
 //   LP_NATIVE_VECTOR_WIDTH=128 (SIMD-4)                          same rays per CPU-s
 //   maxLeafSize 2, SAH intersectionCost 0.5 or 2 (--leaf/--icost) within noise
+//   a queue of rays per invocation: traversal as a step per node, a lane  -23% (primary -38%,
+//     whose ray is done takes the next from a shared counter, up to        shadow -36%; 4 rays:
+//     16 rays (Aila and Laine 2009, dynamic fetch; 2026-12-06)              -24/-34/-33%)
+//   (the step-wise traversal alone, one ray per invocation: shadow -9%, primary and diffuse
+//   within noise; neither was kept)
 // BVH_STATS (diffuse): 10.1 nodes and 3.5 triangles per ray, but SIMD-8 batches run 17.4 node
 // and 14.1 triangle-loop iterations; yet halving SIMD width changes nothing and perf puts ~21%
 // of the kernel on the first load of a triangle (cache misses), so per-lane loads, not lane

@@ -8,7 +8,7 @@
 # whose camera moves: the paper's 1920x1080 GPU setting; the Poisson solvers (L2 by 50 CG steps and
 # by 4 multigrid-CG steps, L1 by 20 x 50) on graphs/poisson_pt.json. Prints one markdown table (plus the
 # equal-time summary) and writes CSV to out/device_suite/. Each step has its own time limit;
-# on a GPU each render step is cut at STEP_S = 40 s, so 14 renders, the equal-time run and the
+# on a GPU each render step is cut at STEP_S = 40 s, so 20 renders, the equal-time run and the
 # BVH bench bound the whole.
 #
 #   bash bench/device_suite.sh            # on device 0 at 1920x1080
@@ -59,6 +59,9 @@ cornell=$(scene_of scenes/cornell_box.json)
 # config name | graph | scene | extra render arguments (optional)
 configs=(
   "pt|graphs/pt.json|$ajar"
+  "pt_wavefront|graphs/pt.json|$ajar|--set pt.schedule=wavefront"
+  "pt_cornell|graphs/pt.json|$cornell"
+  "pt_cornell_wavefront|graphs/pt.json|$cornell|--set pt.schedule=wavefront"
   "restir_pt|graphs/restir_pt.json|$ajar"
   "area_restir|graphs/area_restir.json|$ajar"
   "sms|graphs/sms.json|$sphere"

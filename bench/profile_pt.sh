@@ -91,6 +91,20 @@ print(string.format("%.3f %.3f %.0f", r, g, b))
 EOF
 read -r lane_iters batch_iters subgroup < <("$LOOM" run "$OUT/lanes.lua" image="$OUT/lanes.exr")
 
+# Lane use of BVH traversal: per query, the steps of this lane and the most steps of any lane of
+# its SIMD batch (shared among the batch's active lanes, so that the image's sum is the batch's).
+tlanes=$OUT/shaders-traversal-lanes
+make_variant traversal-lanes "" "" "" >/dev/null
+perl -0pi -e 's/(#define LOOM_BVH_GLSL\n)/$1#extension GL_KHR_shader_subgroup_arithmetic : require\nfloat prof_lane_steps = 0.0, prof_batch_share = 0.0;\n/ or die "traversal lanes: guard not found\n"' "$tlanes/lib/bvh.glsl"
+perl -0pi -e '$n += s/(bool (trace_closest|trace_any)\([^)]*\) \{\n(    Hit hit;\n)?)    return (bvh_traverse\([^;]*\));/$1    uint prof_before = bvh_iterations;\n    bool prof_r = $4;\n    uint prof_steps = bvh_iterations - prof_before;\n    prof_lane_steps += float(prof_steps);\n    prof_batch_share += float(subgroupMax(prof_steps)) \/ float(subgroupAdd(1u));\n    return prof_r;/g; END { die "traversal lanes: trace functions not found\n" unless $n == 2 }' "$tlanes/lib/bvh.glsl"
+RE='(imageStore\(colorImage, ip,)[^;]*;' perl -0pi -e \
+  's/$ENV{RE}/$1 vec4(prof_lane_steps, prof_batch_share, 0.0, 1.0));/ or die "traversal lanes: store not found\n"' \
+  "$tlanes/passes/path_tracer/path_tracer_common.glsl"
+LOOM_SHADER_PATH=$tlanes "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
+  --frames 4 --set pt.maxBounces="$BOUNCES" --quiet --output accum.output="$OUT/traversal_lanes.exr" >"$OUT/traversal_lanes.log" 2>&1 \
+  || { echo "profile_pt.sh: traversal lanes render failed: $(tail -3 "$OUT/traversal_lanes.log")" >&2; exit 1; }
+read -r lane_steps batch_share _ < <("$LOOM" run "$OUT/lanes.lua" image="$OUT/traversal_lanes.exr")
+
 base=${best[base]}
 printf '\n| stage (duplicated) | PT GPU ms/frame | marginal ms | share of base |\n| --- | --- | --- | --- |\n'
 printf '| base | %s | | |\n' "$base"
@@ -102,4 +116,6 @@ for n in "${names[@]:1}"; do
 done
 awk -v a="$lane_iters" -v m="$batch_iters" -v s="$subgroup" 'BEGIN {
   printf "\npath loop: %.2f iterations per path, %.2f per SIMD batch of %d lanes: lane use %.0f%%\n", a, m, s, 100 * a / m }'
+awk -v a="$lane_steps" -v m="$batch_share" -v s="$subgroup" 'BEGIN {
+  printf "BVH traversal: %.2f steps per path, %.2f per SIMD batch of %d lanes: lane use %.0f%% (of which the path loop'"'"'s is above)\n", a, m * s, s, 100 * a / (m * s) }'
 echo "CSV: $csv"
