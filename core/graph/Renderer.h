@@ -57,6 +57,10 @@ public:
     // Animation time in frames (camera paths); constant unless the application steps it.
     void setTime(float time) { mTime = time; }
     float time() const { return mTime; }
+    // Kernels compiled for the scene's material and light types only (default; the
+    // environment's LOOM_SCENE_SPECIALIZATION=0 turns it off): off, they carry every type's
+    // code, as kernels compiled without a scene do. Same images either way.
+    void setSceneSpecialization(bool on) { mSceneSpecialization = on; }
 
     ImageData readOutput(const std::string& port);
     // Throws UserError when any float output holds NaN/Inf (names pass.port and pixel).
@@ -83,7 +87,11 @@ private:
     uint32_t mWidth, mHeight, mSeed;
     uint64_t mExternalRevision = 0;
     uint64_t mFrames = 0;
-    bool mShapeMotionBlur = false;  // LOOM_SHAPE_MOTION_BLUR is among the compiler's defines
+    // The scene's defines among the compiler's (LOOM_SHAPE_MOTION_BLUR, LOOM_SCENE_MATERIALS,
+    // LOOM_SCENE_LIGHTS), and whether the material and light types are specialised.
+    ShaderDefines mSceneDefines;
+    bool mSceneSpecialization = sceneSpecializationDefault();
+    static bool sceneSpecializationDefault();
 };
 
 }  // namespace loom

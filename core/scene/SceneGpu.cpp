@@ -358,6 +358,10 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     }
     if (!cdf.empty()) cdf.back() = 1.0f;  // guard the last bin against round-off
 
+    for (const auto& sg : shapes)
+        if (sg.material < materials.size()) mMaterialTypes |= 1u << materials[sg.material].info.x;
+    for (const auto& lg : lights) mLightTypes |= 1u << lg.type;
+
     auto& g = *mImpl;
     if (g.moving.empty()) {
         g.vertices = upload(gpu, vertices, "SceneVertices");

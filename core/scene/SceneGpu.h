@@ -40,6 +40,12 @@ public:
     // kernels need the motion-blur code of the BVH and the surface points, compiled in only
     // with LOOM_SHAPE_MOTION_BLUR (Renderer sets it), since it slows static traversal.
     bool shapesMoveOverShutter() const;
+    // The material types the shapes use (bit t: BsdfType t) and the light types of the light
+    // list (bit t: LIGHT t in scene.glsl): kernels are compiled for these only
+    // (LOOM_SCENE_MATERIALS and LOOM_SCENE_LIGHTS, set by the Renderer), since llvmpipe runs
+    // the code of every if-block, taken or not.
+    uint32_t materialTypes() const { return mMaterialTypes; }
+    uint32_t lightTypes() const { return mLightTypes; }
     const SceneStats& stats() const { return mStats; }
     // Changes whenever the camera or frame time changes: passes with history reset on it.
     uint64_t revision() const { return mRevision; }
@@ -67,7 +73,9 @@ private:
     float mShutterOpen = 0.0f, mShutterClose = 0.0f;  // of the last updateShapes
     uint32_t mWidth = 0, mHeight = 0;
     bool mCameraDirty = true;
-    bool mPreviousDiffers = false;  // the previous frame's camera or shapes differ from this one's
+    bool mPreviousDiffers = false;
+    uint32_t mMaterialTypes = 0,
+             mLightTypes = 0;  // the previous frame's camera or shapes differ from this one's
 };
 
 }  // namespace loom::scene

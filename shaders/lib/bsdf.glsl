@@ -78,13 +78,13 @@ vec3 bsdf_sample_weight(BsdfSample s) { return s.pdf > 0.0 ? s.f / s.pdf : vec3(
 // Union of the lobes a material can produce (e.g. skip light sampling when only delta).
 uint bsdf_flags(Material m) {
     uint t = material_type(m);
-    if (t == MATERIAL_DIFFUSE) return BSDF_REFLECTION | BSDF_DIFFUSE;
-    if (t == MATERIAL_DIELECTRIC) return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DELTA;
-    if (t == MATERIAL_ROUGH_DIELECTRIC) return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY;
-    if (t == MATERIAL_CONDUCTOR) return BSDF_REFLECTION | BSDF_DELTA;
-    if (t == MATERIAL_ROUGH_CONDUCTOR) return BSDF_REFLECTION | BSDF_GLOSSY;
-    if (t == MATERIAL_PLASTIC) return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_DELTA;
-    if (t == MATERIAL_ROUGH_PLASTIC) return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_GLOSSY;
+    if (material_is(t, MATERIAL_DIFFUSE)) return BSDF_REFLECTION | BSDF_DIFFUSE;
+    if (material_is(t, MATERIAL_DIELECTRIC)) return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DELTA;
+    if (material_is(t, MATERIAL_ROUGH_DIELECTRIC)) return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY;
+    if (material_is(t, MATERIAL_CONDUCTOR)) return BSDF_REFLECTION | BSDF_DELTA;
+    if (material_is(t, MATERIAL_ROUGH_CONDUCTOR)) return BSDF_REFLECTION | BSDF_GLOSSY;
+    if (material_is(t, MATERIAL_PLASTIC)) return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_DELTA;
+    if (material_is(t, MATERIAL_ROUGH_PLASTIC)) return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_GLOSSY;
     return BSDF_TRANSMISSION | BSDF_DELTA | BSDF_NULL;
 }
 
@@ -344,7 +344,8 @@ BsdfSample plastic_sample(Material m, vec3 wo, vec3 u, bool rough) {
 // Dispatch.
 
 bool bsdf_is_opaque(uint t) {
-    return t != MATERIAL_DIELECTRIC && t != MATERIAL_ROUGH_DIELECTRIC && t != MATERIAL_NULL;
+    return !material_is(t, MATERIAL_DIELECTRIC) && !material_is(t, MATERIAL_ROUGH_DIELECTRIC) &&
+           !material_is(t, MATERIAL_NULL);
 }
 
 // Two-sided opaque materials see the back side as the front: mirror both directions.
@@ -370,11 +371,11 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi, uint mode) {
         wi.z = -wi.z;
     }
     uint t = material_type(m);
-    if (t == MATERIAL_DIFFUSE) return diffuse_eval(m.diffuse.rgb, wo, wi);
-    if (t == MATERIAL_ROUGH_CONDUCTOR) return rough_conductor_eval(m, wo, wi);
-    if (t == MATERIAL_PLASTIC) return plastic_eval(m, wo, wi, false);
-    if (t == MATERIAL_ROUGH_PLASTIC) return plastic_eval(m, wo, wi, true);
-    if (t == MATERIAL_ROUGH_DIELECTRIC) {
+    if (material_is(t, MATERIAL_DIFFUSE)) return diffuse_eval(m.diffuse.rgb, wo, wi);
+    if (material_is(t, MATERIAL_ROUGH_CONDUCTOR)) return rough_conductor_eval(m, wo, wi);
+    if (material_is(t, MATERIAL_PLASTIC)) return plastic_eval(m, wo, wi, false);
+    if (material_is(t, MATERIAL_ROUGH_PLASTIC)) return plastic_eval(m, wo, wi, true);
+    if (material_is(t, MATERIAL_ROUGH_DIELECTRIC)) {
         vec3 f;
         float pdf;
         rough_dielectric_eval_pdf_any_side(m, wo, wi, mode, f, pdf);
@@ -391,11 +392,11 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         wi.z = -wi.z;
     }
     uint t = material_type(m);
-    if (t == MATERIAL_DIFFUSE) return diffuse_pdf(wo, wi);
-    if (t == MATERIAL_ROUGH_CONDUCTOR) return rough_conductor_pdf(m, wo, wi);
-    if (t == MATERIAL_PLASTIC) return plastic_pdf(m, wo, wi, false);
-    if (t == MATERIAL_ROUGH_PLASTIC) return plastic_pdf(m, wo, wi, true);
-    if (t == MATERIAL_ROUGH_DIELECTRIC) {
+    if (material_is(t, MATERIAL_DIFFUSE)) return diffuse_pdf(wo, wi);
+    if (material_is(t, MATERIAL_ROUGH_CONDUCTOR)) return rough_conductor_pdf(m, wo, wi);
+    if (material_is(t, MATERIAL_PLASTIC)) return plastic_pdf(m, wo, wi, false);
+    if (material_is(t, MATERIAL_ROUGH_PLASTIC)) return plastic_pdf(m, wo, wi, true);
+    if (material_is(t, MATERIAL_ROUGH_DIELECTRIC)) {
         vec3 f;
         float pdf;
         rough_dielectric_eval_pdf_any_side(m, wo, wi, TRANSPORT_RADIANCE, f, pdf);
@@ -410,25 +411,25 @@ BsdfSample bsdf_sample(Material m, vec3 wo, vec3 u, uint mode) {
     if (flip) wo.z = -wo.z;
     uint t = material_type(m);
     BsdfSample s = bsdf_sample_none();
-    if (t == MATERIAL_DIFFUSE) {
+    if (material_is(t, MATERIAL_DIFFUSE)) {
         s = diffuse_sample(m.diffuse.rgb, wo, u.yz);
-    } else if (t == MATERIAL_DIELECTRIC) {
+    } else if (material_is(t, MATERIAL_DIELECTRIC)) {
         s = dielectric_sample(m, wo, u.x, mode);
-    } else if (t == MATERIAL_ROUGH_DIELECTRIC) {
+    } else if (material_is(t, MATERIAL_ROUGH_DIELECTRIC)) {
         if (wo.z == 0.0) return s;
         bool inside = wo.z < 0.0;
         float eta = inside ? 1.0 / material_eta(m) : material_eta(m);
         s = rough_dielectric_sample_front(m, vec3(wo.xy, abs(wo.z)), u, eta, mode);
         if (inside) s.wi.z = -s.wi.z;
-    } else if (t == MATERIAL_CONDUCTOR) {
+    } else if (material_is(t, MATERIAL_CONDUCTOR)) {
         s = conductor_sample(m, wo);
-    } else if (t == MATERIAL_ROUGH_CONDUCTOR) {
+    } else if (material_is(t, MATERIAL_ROUGH_CONDUCTOR)) {
         s = rough_conductor_sample(m, wo, u.yz);
-    } else if (t == MATERIAL_PLASTIC) {
+    } else if (material_is(t, MATERIAL_PLASTIC)) {
         s = plastic_sample(m, wo, u, false);
-    } else if (t == MATERIAL_ROUGH_PLASTIC) {
+    } else if (material_is(t, MATERIAL_ROUGH_PLASTIC)) {
         s = plastic_sample(m, wo, u, true);
-    } else if (t == MATERIAL_NULL) {
+    } else if (material_is(t, MATERIAL_NULL)) {
         s = bsdf_sample_make(-wo, vec3(1.0), 1.0, BSDF_TRANSMISSION | BSDF_DELTA | BSDF_NULL, 1.0);
     }
     if (flip) s.wi.z = -s.wi.z;

@@ -62,7 +62,8 @@ float light_pdf_environment(vec3 wi) {
     uint li = scene_info.counts.w;
     if (li == ~0u) return 0.0;
     LightGpu l = scene_lights[li];
-    if (l.type == LIGHT_CONSTANT) return l.pmf / (4.0 * PI);
+    if (light_is(l.type, LIGHT_CONSTANT)) return l.pmf / (4.0 * PI);
+    if (!light_type_present(LIGHT_ENVIRONMENT)) return 0.0;
     return l.pmf * envmap_pdf(l.index, wi);
 }
 
@@ -71,7 +72,8 @@ vec3 environment_radiance(vec3 wi) {
     uint li = scene_info.counts.w;
     if (li == ~0u) return vec3(0.0);
     LightGpu l = scene_lights[li];
-    if (l.type == LIGHT_CONSTANT) return l.p1.rgb;
+    if (light_is(l.type, LIGHT_CONSTANT)) return l.p1.rgb;
+    if (!light_type_present(LIGHT_ENVIRONMENT)) return vec3(0.0);
     return l.p1.x * envmap_eval(l.index, wi);
 }
 
@@ -83,7 +85,7 @@ vec3 point_light_incident(LightGpu l, vec3 p, out vec3 wi, out float dist) {
     dist = sqrt(dist2);
     wi = d / dist;
     vec3 Li = l.p1.rgb / dist2;
-    if (l.type == LIGHT_SPOT) {
+    if (light_is(l.type, LIGHT_SPOT)) {
         // Mitsuba spot falloff: 1 inside the beam width, linear in angle to 0 at the cutoff.
         float cos_t = dot(-wi, l.p2.xyz);
         float cos_cutoff = l.p2.w, cos_beam = l.p0.w;
@@ -108,7 +110,7 @@ LightSample sample_light(vec3 p, vec3 u) {
     uint li = select_light(u.z);
     ls.light = li;
     LightGpu l = scene_lights[li];
-    if (l.type == LIGHT_TRIANGLE) {
+    if (light_is(l.type, LIGHT_TRIANGLE)) {
         vec3 a, b, c;
         triangle_positions(l.index, a, b, c);
         float omega = spherical_triangle_area(p, a, b, c);
@@ -141,20 +143,20 @@ LightSample sample_light(vec3 p, vec3 u) {
         SurfacePoint sp = surface_point(l.index, vec2(0.0));
         ls.n = sp.ng;
         ls.Li = emitted_radiance(sp.shape, sp.ng, ls.wi);
-    } else if (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) {
+    } else if (light_is(l.type, LIGHT_POINT) || light_is(l.type, LIGHT_SPOT)) {
         ls.Li = point_light_incident(l, p, ls.wi, ls.dist);
         ls.pdf = l.pmf;
         ls.is_delta = true;
-    } else if (l.type == LIGHT_DIRECTIONAL) {
+    } else if (light_is(l.type, LIGHT_DIRECTIONAL)) {
         ls.wi = l.p0.xyz;
         ls.Li = l.p1.rgb;
         ls.pdf = l.pmf;
         ls.is_delta = true;
-    } else if (l.type == LIGHT_CONSTANT) {
+    } else if (light_is(l.type, LIGHT_CONSTANT)) {
         ls.wi = sample_uniform_sphere(u.xy);
         ls.Li = l.p1.rgb;
         ls.pdf = l.pmf / (4.0 * PI);
-    } else {  // LIGHT_ENVIRONMENT
+    } else if (light_is(l.type, LIGHT_ENVIRONMENT)) {
         float pdf;
         ls.wi = envmap_sample(l.index, u.xy, pdf);
         ls.Li = l.p1.x * envmap_eval(l.index, ls.wi);

@@ -32,7 +32,22 @@ struct Material {
     uvec4 textures;      // x reflectance, y specular reflectance, z normal map, w reserved
 };
 
-uint material_type(Material m) { return m.info.x; }
+// The material types the scene has (bit t: MATERIAL t), a compile-time constant the Renderer
+// defines from its scene (SceneGpu::materialTypes; all types without one). llvmpipe (Mesa 22)
+// runs the straight-line code of every if-block whether a lane takes it or not (only loops end
+// early), so the code of a type the scene lacks must not be in a kernel at all: dispatch on
+// material types with material_is, whose answer is a constant false for those types.
+#ifndef LOOM_SCENE_MATERIALS
+#define LOOM_SCENE_MATERIALS 0xffu
+#endif
+bool material_type_present(uint t) { return ((uint(LOOM_SCENE_MATERIALS) >> t) & 1u) != 0u; }
+
+// A scene with one material type makes the type itself a constant.
+uint material_type(Material m) {
+    const uint types = uint(LOOM_SCENE_MATERIALS);
+    return bitCount(types) == 1 ? uint(findLSB(types)) : m.info.x;
+}
+bool material_is(uint type, uint t) { return material_type_present(t) && type == t; }
 bool material_two_sided(Material m) { return (m.info.y & MATERIAL_FLAG_TWO_SIDED) != 0u; }
 bool material_nonlinear(Material m) { return (m.info.y & MATERIAL_FLAG_NONLINEAR) != 0u; }
 // MICROFACET_GGX (0) or MICROFACET_BECKMANN (1), see microfacet.glsl.

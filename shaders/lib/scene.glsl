@@ -53,6 +53,15 @@ const uint LIGHT_SPOT = 2u;
 const uint LIGHT_DIRECTIONAL = 3u;
 const uint LIGHT_ENVIRONMENT = 4u;
 const uint LIGHT_CONSTANT = 5u;
+// The light types the scene has (bit t: LIGHT t), a compile-time constant the Renderer defines
+// from its scene (SceneGpu::lightTypes; all types without one), so that the code of absent
+// types is compiled out (see LOOM_SCENE_MATERIALS in material.glsl for why): dispatch on
+// light types with light_is.
+#ifndef LOOM_SCENE_LIGHTS
+#define LOOM_SCENE_LIGHTS 0x3fu
+#endif
+bool light_type_present(uint t) { return ((uint(LOOM_SCENE_LIGHTS) >> t) & 1u) != 0u; }
+bool light_is(uint type, uint t) { return light_type_present(t) && type == t; }
 
 struct SceneInfo {
     CameraPose camera_open;   // this frame, shutter open
