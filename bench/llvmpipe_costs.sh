@@ -2,7 +2,8 @@
 # What a branch costs on llvmpipe (issue 22): a fixed block of ALU work (bench/data/llvmpipe/
 # branch_cost.comp, STEPS dependent sin/cos iterations) run by nobody, by everybody, behind a
 # uniform false branch, behind a per-invocation false branch, by every other invocation
-# (divergent inside each SIMD batch) and by every other batch of 8 (coherent). Prints GPU ms per
+# (divergent inside each SIMD batch) and by every other batch of 8 (coherent), once as a loop
+# (STEPS iterations) and once as straight-line code (128 unrolled iterations). Prints GPU ms per
 # dispatch (min over REPS) and each case's cost as a share of "every invocation runs it".
 # Never asserts.
 #
@@ -18,27 +19,33 @@ export LOOM_SHADER_PATH=$ROOT/bench/data/llvmpipe${LOOM_SHADER_PATH:+:$LOOM_SHAD
 labels=("nobody (no branch)" "every invocation (no branch)" "nobody, uniform false branch"
   "nobody, per-invocation false branch" "every other invocation (divergent in a batch)"
   "every other batch of 8 (coherent)")
-kernel_ms() {  # work -> GPU ms per dispatch (first frame excluded)
+kernel_ms() {  # work shape -> GPU ms per dispatch (first frame excluded)
   "$LOOM" render bench/data/llvmpipe/branch_cost.json --width "$W" --height "$H" --frames "$FRAMES" \
-    --set kernel.work="$1" --set kernel.steps="$STEPS" --timings --quiet --out "$OUT/last.exr" \
+    --set kernel.work="$1" --set kernel.steps="$STEPS" --set "kernel.defines={\"BLOCK_SHAPE\": \"$2\", \"WORK\": \"$1\"}" \
+    --timings --quiet --out "$OUT/last.exr" \
     >"$OUT/last.log" 2>&1 || { echo "llvmpipe_costs.sh: render failed: $(tail -3 "$OUT/last.log")" >&2; exit 1; }
   awk '$1 == "kernel" && NF == 2 {print $2}' "$OUT/last.log"
 }
 declare -A best
 for ((r = 0; r < REPS; ++r)); do
-  for w in 0 1 2 3 4 5; do
-    ms=$(kernel_ms "$w")
-    [ -n "$ms" ] || { echo "llvmpipe_costs.sh: no 'kernel' timing in $OUT/last.log" >&2; exit 1; }
-    if [ -z "${best[$w]:-}" ] || awk -v a="$ms" -v b="${best[$w]}" 'BEGIN { exit !(a < b) }'; then best[$w]=$ms; fi
+  for shape in 0 1; do
+    for w in 0 1 2 3 4 5; do
+      ms=$(kernel_ms "$w" "$shape")
+      [ -n "$ms" ] || { echo "llvmpipe_costs.sh: no 'kernel' timing in $OUT/last.log" >&2; exit 1; }
+      k="$shape $w"
+      if [ -z "${best[$k]:-}" ] || awk -v a="$ms" -v b="${best[$k]}" 'BEGIN { exit !(a < b) }'; then best[$k]=$ms; fi
+    done
   done
 done
 echo "llvmpipe_costs: ${W}x${H}, $STEPS steps, LP_NUM_THREADS=$LP_NUM_THREADS, $REPS reps (min); $(uptime)"
-printf '\n| who runs the block | GPU ms | share of all (above none) |\n| --- | --- | --- |\n'
+printf '\n| who runs the block | loop: GPU ms | share | straight-line: GPU ms | share |\n| --- | --- | --- | --- | --- |\n'
 csv=$OUT/llvmpipe_costs.csv
-echo "work,case,gpu_ms,share" >"$csv"
+echo "work,case,loop_ms,loop_share,straight_ms,straight_share" >"$csv"
 for w in 0 1 2 3 4 5; do
-  awk -v l="${labels[$w]}" -v t="${best[$w]}" -v z="${best[0]}" -v a="${best[1]}" -v w="$w" -v csv="$csv" 'BEGIN {
-    s = (t - z) / (a - z); printf "| %s | %.2f | %.0f%% |\n", l, t, 100 * s
-    printf "%d,%s,%.3f,%.4f\n", w, l, t, s >> csv }'
+  awk -v l="${labels[$w]}" -v t="${best[0 $w]}" -v z="${best[0 0]}" -v a="${best[0 1]}" \
+      -v u="${best[1 $w]}" -v y="${best[1 0]}" -v c="${best[1 1]}" -v w="$w" -v csv="$csv" 'BEGIN {
+    s = (t - z) / (a - z); q = (u - y) / (c - y)
+    printf "| %s | %.2f | %.0f%% | %.2f | %.0f%% |\n", l, t, 100 * s, u, 100 * q
+    printf "%d,%s,%.3f,%.4f,%.3f,%.4f\n", w, l, t, s, u, q >> csv }'
 done
 echo "CSV: $csv"
