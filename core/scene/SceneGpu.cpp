@@ -358,8 +358,13 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
     }
     if (!cdf.empty()) cdf.back() = 1.0f;  // guard the last bin against round-off
 
-    for (const auto& sg : shapes)
-        if (sg.material < materials.size()) mMaterialTypes |= 1u << materials[sg.material].info.x;
+    for (const auto& sg : shapes) {
+        if (sg.material >= materials.size()) continue;
+        const MaterialGpu& m = materials[sg.material];
+        mMaterialTypes |= 1u << m.info.x;
+        for (int slot = 0; slot < 3; ++slot)
+            if (m.textures[slot] != kMaterialNoTexture) mTextureUses |= 1u << slot;
+    }
     for (const auto& lg : lights) mLightTypes |= 1u << lg.type;
 
     auto& g = *mImpl;

@@ -46,6 +46,9 @@ public:
     // the code of every if-block, taken or not.
     uint32_t materialTypes() const { return mMaterialTypes; }
     uint32_t lightTypes() const { return mLightTypes; }
+    // The texture slots the shapes' materials use (bit 0 reflectance, 1 specular reflectance,
+    // 2 normal map): LOOM_SCENE_TEXTURES.
+    uint32_t textureUses() const { return mTextureUses; }
     const SceneStats& stats() const { return mStats; }
     // Changes whenever the camera or frame time changes: passes with history reset on it.
     uint64_t revision() const { return mRevision; }
@@ -73,9 +76,8 @@ private:
     float mShutterOpen = 0.0f, mShutterClose = 0.0f;  // of the last updateShapes
     uint32_t mWidth = 0, mHeight = 0;
     bool mCameraDirty = true;
-    bool mPreviousDiffers = false;
-    uint32_t mMaterialTypes = 0,
-             mLightTypes = 0;  // the previous frame's camera or shapes differ from this one's
+    bool mPreviousDiffers = false;  // the previous frame's camera or shapes differ from this one's
+    uint32_t mMaterialTypes = 0, mLightTypes = 0, mTextureUses = 0;  // kernel specialisation
 };
 
 }  // namespace loom::scene

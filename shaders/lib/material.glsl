@@ -58,9 +58,21 @@ float material_alpha(Material m) { return m.diffuse.a; }
 float material_eta(Material m) { return m.specular.a; }
 // Hemispherical average of the internal Fresnel reflectance of the coat, Fdr(1 / eta).
 float material_fdr_int(Material m) { return m.transmittance.a; }
+// The texture slots some material of the scene uses, a compile-time constant the Renderer
+// defines (SceneGpu::textureUses; all without a scene), so that texture lookups a scene never
+// makes are compiled out: bit 0 reflectance, 1 specular reflectance, 2 normal map.
+#ifndef LOOM_SCENE_TEXTURES
+#define LOOM_SCENE_TEXTURES 0x7u
+#endif
 // Texture indices, MATERIAL_NO_TEXTURE when constant.
-uint material_reflectance_texture(Material m) { return m.textures.x; }
-uint material_specular_texture(Material m) { return m.textures.y; }
-uint material_normal_map(Material m) { return m.textures.z; }
+uint material_reflectance_texture(Material m) {
+    return (uint(LOOM_SCENE_TEXTURES) & 1u) != 0u ? m.textures.x : MATERIAL_NO_TEXTURE;
+}
+uint material_specular_texture(Material m) {
+    return (uint(LOOM_SCENE_TEXTURES) & 2u) != 0u ? m.textures.y : MATERIAL_NO_TEXTURE;
+}
+uint material_normal_map(Material m) {
+    return (uint(LOOM_SCENE_TEXTURES) & 4u) != 0u ? m.textures.z : MATERIAL_NO_TEXTURE;
+}
 
 #endif

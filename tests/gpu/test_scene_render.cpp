@@ -124,19 +124,40 @@ size_t differingValues(const ImageData& a, const ImageData& b) {
 TEST(SceneRender, SceneSpecializationKeepsTheImage) {
     auto files = filesIn(fs::path(LOOM_SOURCE_DIR) / "scenes", ".json", false);
     files.push_back(std::string(LOOM_SOURCE_DIR) + "/bench/data/peer/glossy_env.json");
-    uint32_t materialsSeen = 0, lightsSeen = 0;
-    for (auto& f : files) {
+    std::vector<std::pair<std::string, scene::Scene>> scenes;
+    for (auto& f : files) scenes.emplace_back(f, scene::loadScene(f));
+    // The Cornell box with a tangent-space normal map (tilted texels) on every material and a
+    // textured specular reflectance: the texture slots no project scene uses.
+    scene::Scene mapped = scenes.front().second;
+    for (auto& [f, s] : scenes)
+        if (f.find("cornell_box") != std::string::npos) mapped = s;
+    scene::Texture normals;
+    normals.name = "tilted";
+    normals.width = normals.height = 2;
+    normals.isNormalMap = true;
+    normals.rgba = {0.7f, 0.5f, 0.9f, 1, 0.5f, 0.3f, 0.95f, 1,
+                    0.4f, 0.6f, 0.9f, 1, 0.5f, 0.5f, 1,     1};
+    mapped.textures.push_back(normals);
+    for (auto& m : mapped.materials) {
+        m.normalMap = int(mapped.textures.size() - 1);
+        m.specularReflectanceTexture = int(mapped.textures.size() - 1);
+    }
+    scenes.emplace_back("cornell_box with normal and specular maps", mapped);
+    uint32_t materialsSeen = 0, lightsSeen = 0, texturesSeen = 0;
+    for (auto& [f, s] : scenes) {
         SCOPED_TRACE(f);
-        scene::Scene s = scene::loadScene(f);
         ImageData all = ptImage(s, false, 1), own = ptImage(s, true, 1);
         EXPECT_EQ(differingValues(all, own), 0u);
         scene::SceneGpu gpuScene(*sharedGpu(), s);
         materialsSeen |= gpuScene.materialTypes();
         lightsSeen |= gpuScene.lightTypes();
+        texturesSeen |= gpuScene.textureUses();
     }
-    std::printf("material types covered %#x, light types %#x\n", materialsSeen, lightsSeen);
+    std::printf("material types covered %#x, light types %#x, texture slots %#x\n", materialsSeen,
+                lightsSeen, texturesSeen);
     EXPECT_GE(std::popcount(materialsSeen), 4) << "the scenes cover too few material types";
     EXPECT_GE(std::popcount(lightsSeen), 3) << "the scenes cover too few light types";
+    EXPECT_EQ(texturesSeen, 7u) << "a texture slot is not covered";
 }
 
 // A renderer whose scene changes recompiles for the new scene's types: the Cornell box has
