@@ -46,6 +46,19 @@ make_variant() {  # name file regex replacement -> prints the shader dir
   echo "$dir"
 }
 
+counter_means() {  # shader dir, name, GLSL vec4 to store as the color -> its image mean "r g b"
+  local dir=$1
+  RE='(imageStore\(colorImage, ip,)[^;]*;' STORE="$3" perl -0pi -e \
+    's/$ENV{RE}/$1 $ENV{STORE});/ or die "counters: store not found\n"' \
+    "$dir/passes/path_tracer/path_tracer_common.glsl"
+  LOOM_SHADER_PATH=$dir "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
+    --frames 4 --set pt.maxBounces="$BOUNCES" --quiet --output accum.output="$OUT/$2.exr" >"$OUT/$2.log" 2>&1 \
+    || { echo "profile_pt.sh: $2 render failed: $(tail -3 "$OUT/$2.log")" >&2; exit 1; }
+  echo 'local r, g, b = loom.read_image(loom.arg("image", "")):mean()
+print(string.format("%.3f %.3f %.0f", r, g, b))' >"$OUT/means.lua"
+  "$LOOM" run "$OUT/means.lua" image="$OUT/$2.exr"
+}
+
 pt_ms() {  # shader dir -> PT GPU ms per frame (loom --timings, first frame excluded)
   LOOM_SHADER_PATH=$1 "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
     --frames "$FRAMES" --set pt.maxBounces="$BOUNCES" --timings --quiet --out "$OUT/last.exr" >"$OUT/last.log" 2>&1 \
@@ -79,17 +92,8 @@ RE='struct PathSettings \{' REP='uint prof_path_iters = 0u;
 struct PathSettings {' perl -0pi -e 's/$ENV{RE}/$ENV{REP}/ or die "lanes: PathSettings not found\n"' "$lanes/$PATH_GLSL"
 RE='(\#version 460\n)' perl -0pi -e 's/$ENV{RE}/$1#extension GL_KHR_shader_subgroup_arithmetic : require\n/ or die "lanes: version not found\n"' \
   "$lanes/passes/path_tracer/path_tracer.comp"
-RE='(imageStore\(colorImage, ip,)[^;]*;' perl -0pi -e \
-  's/$ENV{RE}/$1 vec4(float(prof_path_iters), float(subgroupMax(prof_path_iters)), float(gl_SubgroupSize), 1.0));/ or die "lanes: store not found\n"' \
-  "$lanes/passes/path_tracer/path_tracer_common.glsl"
-LOOM_SHADER_PATH=$lanes "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
-  --frames 4 --set pt.maxBounces="$BOUNCES" --quiet --output accum.output="$OUT/lanes.exr" >"$OUT/lanes.log" 2>&1 \
-  || { echo "profile_pt.sh: lanes render failed: $(tail -3 "$OUT/lanes.log")" >&2; exit 1; }
-cat >"$OUT/lanes.lua" <<'EOF'
-local r, g, b = loom.read_image(loom.arg("image", "")):mean()
-print(string.format("%.3f %.3f %.0f", r, g, b))
-EOF
-read -r lane_iters batch_iters subgroup < <("$LOOM" run "$OUT/lanes.lua" image="$OUT/lanes.exr")
+read -r lane_iters batch_iters subgroup < <(counter_means "$lanes" lanes \
+  'vec4(float(prof_path_iters), float(subgroupMax(prof_path_iters)), float(gl_SubgroupSize), 1.0)')
 
 # Lane use of BVH traversal: per query, the steps of this lane and the most steps of any lane of
 # its SIMD batch (shared among the batch's active lanes, so that the image's sum is the batch's).
@@ -97,13 +101,8 @@ tlanes=$OUT/shaders-traversal-lanes
 make_variant traversal-lanes "" "" "" >/dev/null
 perl -0pi -e 's/(#define LOOM_BVH_GLSL\n)/$1#extension GL_KHR_shader_subgroup_arithmetic : require\nfloat prof_lane_steps = 0.0, prof_batch_share = 0.0;\n/ or die "traversal lanes: guard not found\n"' "$tlanes/lib/bvh.glsl"
 perl -0pi -e '$n += s/(bool (trace_closest|trace_any)\([^)]*\) \{\n(    Hit hit;\n)?)    return (bvh_traverse\([^;]*\));/$1    uint prof_before = bvh_iterations;\n    bool prof_r = $4;\n    uint prof_steps = bvh_iterations - prof_before;\n    prof_lane_steps += float(prof_steps);\n    prof_batch_share += float(subgroupMax(prof_steps)) \/ float(subgroupAdd(1u));\n    return prof_r;/g; END { die "traversal lanes: trace functions not found\n" unless $n == 2 }' "$tlanes/lib/bvh.glsl"
-RE='(imageStore\(colorImage, ip,)[^;]*;' perl -0pi -e \
-  's/$ENV{RE}/$1 vec4(prof_lane_steps, prof_batch_share, 0.0, 1.0));/ or die "traversal lanes: store not found\n"' \
-  "$tlanes/passes/path_tracer/path_tracer_common.glsl"
-LOOM_SHADER_PATH=$tlanes "$LOOM" render graphs/pt.json --scene "$SCENE" --width "$W" --height "$H" \
-  --frames 4 --set pt.maxBounces="$BOUNCES" --quiet --output accum.output="$OUT/traversal_lanes.exr" >"$OUT/traversal_lanes.log" 2>&1 \
-  || { echo "profile_pt.sh: traversal lanes render failed: $(tail -3 "$OUT/traversal_lanes.log")" >&2; exit 1; }
-read -r lane_steps batch_share _ < <("$LOOM" run "$OUT/lanes.lua" image="$OUT/traversal_lanes.exr")
+read -r lane_steps batch_share _ < <(counter_means "$tlanes" traversal_lanes \
+  'vec4(prof_lane_steps, prof_batch_share, 0.0, 1.0)')
 
 base=${best[base]}
 printf '\n| stage (duplicated) | PT GPU ms/frame | marginal ms | share of base |\n| --- | --- | --- | --- |\n'
