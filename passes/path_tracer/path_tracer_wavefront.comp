@@ -51,29 +51,28 @@ const uint PT_FLAG_PREV_DELTA = 1u, PT_FLAG_COV_OPEN = 2u, PT_FLAG_COV_CASTER = 
            PT_FLAG_COV_PREFIX = 8u, PT_FLAG_GIVEN = 16u, PT_FLAG_FIRST_FOUND = 32u;
 
 uint pixel_count() { return pc.frameSize.x * pc.frameSize.y; }
-uvec2 pixel_of(uint i) { return uvec2(i % pc.frameSize.x, i / pc.frameSize.x); }
 
 void load_path(uint i, out PathVertexState st, out PathRadiance r, out Rng rng, out uint flags) {
-    WavefrontPath p = paths[i];
-    st.o = p.o.xyz;
-    st.depth = floatBitsToUint(p.o.w);
-    st.d = p.d.xyz;
-    st.prev_pdf = p.d.w;
-    st.beta = p.beta.xyz;
-    flags = floatBitsToUint(p.beta.w);
+    // Member by member: a copy of the whole record would load all 16 vec4s every bounce.
+    st.o = paths[i].o.xyz;
+    st.depth = floatBitsToUint(paths[i].o.w);
+    st.d = paths[i].d.xyz;
+    st.prev_pdf = paths[i].d.w;
+    st.beta = paths[i].beta.xyz;
+    flags = floatBitsToUint(paths[i].beta.w);
     st.prev_delta = (flags & PT_FLAG_PREV_DELTA) != 0u;
     st.cov.open = (flags & PT_FLAG_COV_OPEN) != 0u;
     st.cov.caster = (flags & PT_FLAG_COV_CASTER) != 0u;
     st.cov.prefix = (flags & PT_FLAG_COV_PREFIX) != 0u;
     st.cov.chain_length = flags >> 8u;
-    st.prev_p = p.prev_p.xyz;
+    st.prev_p = paths[i].prev_p.xyz;
     r = path_radiance_none();
-    r.rays = floatBitsToUint(p.prev_p.w);
-    r.L = p.L.xyz;
-    r.L_direct = p.L_direct.xyz;
-    r.albedo = p.albedo.xyz;
-    r.normal = p.normal.xyz;
-    rng.state = p.rng;
+    r.rays = floatBitsToUint(paths[i].prev_p.w);
+    r.L = paths[i].L.xyz;
+    r.L_direct = paths[i].L_direct.xyz;
+    r.albedo = paths[i].albedo.xyz;
+    r.normal = paths[i].normal.xyz;
+    rng.state = paths[i].rng;
 }
 
 void store_path(uint i, PathVertexState st, PathRadiance r, Rng rng, uint keep_flags) {
@@ -202,19 +201,18 @@ void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (any(greaterThanEqual(pixel, pc.frameSize))) return;
     uint i = pixel.y * pc.frameSize.x + pixel.x;
-    WavefrontPath p = paths[i];
     PathRadiance r = path_radiance_none();
-    r.L = p.L.xyz;
-    r.L_direct = p.L_direct.xyz;
-    r.albedo = p.albedo.xyz;
-    r.normal = p.normal.xyz;
+    r.L = paths[i].L.xyz;
+    r.L_direct = paths[i].L_direct.xyz;
+    r.albedo = paths[i].albedo.xyz;
+    r.normal = paths[i].normal.xyz;
     PtPixelSums sums;
-    sums.color = p.sum_color.xyz;
-    sums.direct = p.sum_direct.xyz;
-    sums.albedo = p.sum_albedo.xyz;
-    sums.normal = p.sum_normal.xyz;
+    sums.color = paths[i].sum_color.xyz;
+    sums.direct = paths[i].sum_direct.xyz;
+    sums.albedo = paths[i].sum_albedo.xyz;
+    sums.normal = paths[i].sum_normal.xyz;
     pt_sums_add(sums, r);
-    uint rays = floatBitsToUint(p.prev_p.w);
+    uint rays = floatBitsToUint(paths[i].prev_p.w);
     if (pc.sampleIndex + 1u < pc.dispatchSamples) {
         paths[i].sum_color = vec4(sums.color, uintBitsToFloat(rays));
         paths[i].sum_direct.xyz = sums.direct;
