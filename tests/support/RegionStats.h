@@ -48,8 +48,11 @@ inline double maxZ(const RegionStats& a, const RegionStats& b, double* worstA = 
                    double* worstB = nullptr) {
     double worst = 0.0;
     for (size_t i = 0; i < a.sum.size(); ++i) {
+        // A region both sides compute without noise (the same deterministic value in every
+        // sequence) has se = 0: float rounding alone (1e-8 relative) would read as a huge z.
+        double scale = std::max(std::abs(a.mean(i)), std::abs(b.mean(i)));
         double se = std::sqrt(a.stderr2(i) + b.stderr2(i));
-        double z = std::abs(a.mean(i) - b.mean(i)) / std::max(se, 1e-12);
+        double z = std::abs(a.mean(i) - b.mean(i)) / std::max(se, 1e-6 * scale + 1e-12);
         if (z > worst) {
             worst = z;
             if (worstA) *worstA = a.mean(i);
