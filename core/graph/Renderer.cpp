@@ -104,14 +104,17 @@ void Renderer::frame() {
         // only while shapes move over the shutter (it costs static traversal about 13 % on
         // lavapipe), and only the material types, light types and texture slots the scene
         // uses (llvmpipe runs every if-block's code whether a lane takes it or not: PT is
-        // 1.4-1.8x faster). Kernels fetched per frame pick the defines up at once; the graph
-        // is recompiled for passes that keep pipelines.
+        // 1.4-1.8x faster), and the camera's lens code only under a thin lens. Kernels fetched per
+        // frame pick the defines up at once; the graph is recompiled for passes that keep
+        // pipelines.
         ShaderDefines scene;
         if (mScene->shapesMoveOverShutter()) scene.emplace("LOOM_SHAPE_MOTION_BLUR", "1");
         if (mSceneSpecialization) {
             scene.emplace("LOOM_SCENE_MATERIALS", fmt::format("{:#x}u", mScene->materialTypes()));
             scene.emplace("LOOM_SCENE_LIGHTS", fmt::format("{:#x}u", mScene->lightTypes()));
             scene.emplace("LOOM_SCENE_TEXTURES", fmt::format("{:#x}u", mScene->textureUses()));
+            // The thin-lens code (lens sampling, primary-hit reconnection) only under a lens.
+            scene.emplace("LOOM_SCENE_THIN_LENS", mScene->thinLens() ? "1" : "0");
         }
         if (scene != mSceneDefines) {
             ShaderDefines defines = mCompiler->globalDefines();

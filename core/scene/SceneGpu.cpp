@@ -446,6 +446,12 @@ bool SceneGpu::shapesMoveOverShutter() const {
     return !mImpl->moving.empty() && mScene.camera.shutterClose > mScene.camera.shutterOpen;
 }
 
+bool SceneGpu::thinLens() const {
+    const auto& i = mImpl->infoData;
+    return i.open.up.w > 0.0f || i.close.up.w > 0.0f || i.prev.up.w > 0.0f ||
+           i.prevClose.up.w > 0.0f;
+}
+
 void SceneGpu::setCamera(const Camera& camera) {
     mScene.camera = camera;
     mCameraDirty = true;

@@ -49,6 +49,9 @@ public:
     // The texture slots the shapes' materials use (bit 0 reflectance, 1 specular reflectance,
     // 2 normal map): LOOM_SCENE_TEXTURES.
     uint32_t textureUses() const { return mTextureUses; }
+    // Whether a camera pose of the last setFrame (shutter open or close, this frame or the
+    // previous) is a thin lens with an aperture: LOOM_SCENE_THIN_LENS.
+    bool thinLens() const;
     const SceneStats& stats() const { return mStats; }
     // Changes whenever the camera or frame time changes: passes with history reset on it.
     uint64_t revision() const { return mRevision; }

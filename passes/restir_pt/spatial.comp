@@ -71,7 +71,7 @@ void main() {
     // sample; with Area ReSTIR under a thin lens also primary-hit reconnection, each then with
     // half the neighbour's confidence). The balance heuristic uses the copy shift only.
     uint shifts = SHIFT_COPY;
-    if (!balance && cfg.area != 0u && scene_info.camera_open.up.w > 0.0) shifts = dof_shift_mask(pc.dofShift);
+    if (!balance && cfg.area != 0u && camera_aperture(scene_info.camera_open) > 0.0) shifts = dof_shift_mask(pc.dofShift);
     float n_shifts = float(bitCount(shifts));
     ivec2 tq[MAX_TECHNIQUES];
     uint tshift[MAX_TECHNIQUES];

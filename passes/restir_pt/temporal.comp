@@ -134,8 +134,8 @@ void main() {
     // combined with the canonical technique by pairwise MIS (with one shift: the 2-technique
     // generalized balance heuristic). Primary-hit reconnection needs the balance heuristic.
     uint shifts = SHIFT_COPY;
-    if (cfg.area != 0u && pc.mis == MIS_BALANCE && scene_info.camera_open.up.w > 0.0 &&
-        scene_info.camera_prev.up.w > 0.0)
+    if (cfg.area != 0u && pc.mis == MIS_BALANCE && camera_aperture(scene_info.camera_open) > 0.0 &&
+        camera_aperture(scene_info.camera_prev) > 0.0)
         shifts = dof_shift_mask(pc.dofShift);
     float n_shifts = float(bitCount(shifts));
 

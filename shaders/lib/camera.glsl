@@ -14,6 +14,16 @@ struct CameraPose {
     vec4 lens;          // x = focus distance, y = shutter length (frames), z = type
 };
 
+// LOOM_SCENE_THIN_LENS = 0 (set by the Renderer when no camera pose of the frame has an
+// aperture) compiles every pose as a pinhole: the lens code is then dead, which matters on
+// llvmpipe, where untaken branches still run masked.
+#ifndef LOOM_SCENE_THIN_LENS
+#define LOOM_SCENE_THIN_LENS 1
+#endif
+
+// Aperture radius of a pose (0: pinhole).
+float camera_aperture(CameraPose p) { return LOOM_SCENE_THIN_LENS != 0 ? p.up.w : 0.0; }
+
 struct CameraFrame {
     vec3 origin;
     vec3 right_axis;    // camera +x (points left in image space, Mitsuba)
@@ -33,7 +43,7 @@ CameraFrame camera_frame(CameraPose a, CameraPose b, float s) {
     c.right_axis = normalize(cross(up, c.forward));  // Mitsuba lookat: left = up x dir
     c.up_axis = cross(c.forward, c.right_axis);
     c.tan_half_fov = vec2(mix(a.origin.w, b.origin.w, s), mix(a.target.w, b.target.w, s));
-    c.aperture = a.up.w;
+    c.aperture = camera_aperture(a);
     c.focus_distance = a.lens.x;
     return c;
 }
@@ -51,15 +61,18 @@ CameraPose camera_pose_at(CameraPose a, CameraPose b, float s) {
 // Primary ray through film position uv in [0,1]^2 (top-left origin) with lens sample u_lens.
 void camera_ray(CameraFrame c, vec2 uv, vec2 u_lens, out vec3 origin, out vec3 dir) {
     vec3 d_cam = vec3((1.0 - 2.0 * uv.x) * c.tan_half_fov.x, (1.0 - 2.0 * uv.y) * c.tan_half_fov.y, 1.0);
-    vec3 o_cam = vec3(0.0);
+    // The pinhole ray is computed the same way whether the lens code below is compiled in or
+    // not (LOOM_SCENE_THIN_LENS), so both compile to the same floating-point operations.
+    origin = c.origin;
+    dir = normalize(d_cam.x * c.right_axis + d_cam.y * c.up_axis + c.forward);
     if (c.aperture > 0.0) {
         // Thin lens: all rays through the lens point converge on the focal plane z = focus.
         vec3 p_focus = d_cam * c.focus_distance;
-        o_cam = vec3(c.aperture * sample_disk_concentric(u_lens), 0.0);
+        vec3 o_cam = vec3(c.aperture * sample_disk_concentric(u_lens), 0.0);
         d_cam = p_focus - o_cam;
+        origin = c.origin + o_cam.x * c.right_axis + o_cam.y * c.up_axis;
+        dir = normalize(d_cam.x * c.right_axis + d_cam.y * c.up_axis + d_cam.z * c.forward);
     }
-    origin = c.origin + o_cam.x * c.right_axis + o_cam.y * c.up_axis;
-    dir = normalize(d_cam.x * c.right_axis + d_cam.y * c.up_axis + d_cam.z * c.forward);
 }
 
 // Thin-lens point on the focal plane seen through film position film_uv in [0,1]^2 (the point
