@@ -26,10 +26,10 @@
 -- still: as moving, with the camera at rest (a scene's own camera path is replaced by its time-0
 --   pose): the last of move_frames frames, single-frame
 --   estimates at equal time per frame (how Lin et al. 2022 compare ReSTIR PT with PT).
--- Metrics: relMSE and MAPE (loom.metrics, eps 0.01), and for still/moving rows HDR-FLIP
+-- Metrics: relMSE, MSE and MAPE (loom.metrics, eps 0.01), and for still/moving rows HDR-FLIP
 -- (loom.metrics.flip, mean over the pixels) and relMSE without the worst `trim`
 -- (default 0.001) of the pixels: fireflies dominate relMSE in scenes like veach-ajar.
--- Still/moving rows also give the standard error of relMSE over the repeats (fireflies make it
+-- Still/moving rows also give the standard error of relMSE and MSE over the repeats (fireflies make it
 -- large: same-estimator rows can differ 3x at 8 repeats), the ratio at equal time with the
 -- first configuration's relMSE scaled by frame time (spp_param is an integer: its frame time
 -- can miss the target by a fraction of a sample), the rays traced per frame (every pass's `rays` stat) and the
@@ -118,31 +118,16 @@ end
 
 -- Keyframes that swing the camera `move_degrees` about its target (up axis) and end on the
 -- scene camera at time move_frames - 1 (move = dolly: starting move_dolly further back and
--- with move_zoom times the field of view).
+-- with move_zoom times the field of view; move_end = ahead: cam is the end pose, move_dolly of
+-- the way to the target, and the start is back at the scene camera).
 local function swing_path(cam, path)
-  local o, t, u = cam.origin, cam.target, cam.up
-  local len = math.sqrt(u[1] ^ 2 + u[2] ^ 2 + u[3] ^ 2)
-  local k = {u[1] / len, u[2] / len, u[3] / len}
-  local v = {o[1] - t[1], o[2] - t[2], o[3] - t[3]}
-  local keys = {}
-  for i, deg in ipairs({move_degrees, 0}) do
-    local a = math.rad(deg)
-    local c, s = math.cos(a), math.sin(a)
-    local kxv = {k[2] * v[3] - k[3] * v[2], k[3] * v[1] - k[1] * v[3], k[1] * v[2] - k[2] * v[1]}
-    local kdv = k[1] * v[1] + k[2] * v[2] + k[3] * v[3]
-    local origin = {}
-    -- The start: move_dolly further back (ending on the scene camera), or back at the scene
-    -- camera (move_end = ahead: cam is the end pose, move_dolly of the way to the target).
-    local back = 1
-    if move == "dolly" and i == 1 then
-      back = move_end == "ahead" and 1 / (1 - move_dolly) or 1 + move_dolly
-    end
-    for j = 1, 3 do origin[j] = t[j] + back * (v[j] * c + kxv[j] * s + k[j] * kdv * (1 - c)) end
-    local fov = (move == "dolly" and i == 1) and math.min(170, cam.fov * move_zoom) or cam.fov
-    keys[i] = {time = (i - 1) * (move_frames - 1), origin = origin, target = t, up = u,
-               fov = fov}
+  local back, zoom = 1, 1
+  if move == "dolly" then
+    back = move_end == "ahead" and 1 / (1 - move_dolly) or 1 + move_dolly
+    zoom = move_zoom
   end
-  loom.write_json(path, keys)
+  util.swing_path(cam, path, {degrees = move_degrees, frames = move_frames, back = back,
+                              zoom = zoom})
 end
 
 local rows, summary, stage_rows = {}, {}, {}
@@ -194,7 +179,8 @@ for _, scene_arg in ipairs(scenes) do
         local img = r:image(port)
         local row = {index = #rows + 1, scene = name, camera = "static", config = cfg.name,
                      budget_ms = target, gpu_ms = spent, frames = frames,
-                     relmse = loom.metrics.relmse(img, ref), mape = loom.metrics.mape(img, ref)}
+                     relmse = loom.metrics.relmse(img, ref), mse = loom.metrics.mse(img, ref),
+                     mape = loom.metrics.mape(img, ref)}
         if want.static then
           row.relmse_trim = trimmed_relmse(img, ref, trim)
           rows[#rows + 1] = row
@@ -211,7 +197,7 @@ for _, scene_arg in ipairs(scenes) do
         static_series[c] = {name = cfg.name, x = xs, y = ys}
         summary[#summary + 1] = {scene = name, camera = "static", config = cfg.name,
                                  frames = frames, gpu_ms = spent, ms_per_frame = spent / frames,
-                                 relmse = ys[#ys], mape = rows[#rows].mape,
+                                 relmse = ys[#ys], mse = rows[#rows].mse, mape = rows[#rows].mape,
                                  relmse_trim = rows[#rows].relmse_trim}
         r:capture("tm.output", string.format("%s/%s_%s_static.png", out, name, slug(cfg.name)))
       end
@@ -256,21 +242,30 @@ for _, scene_arg in ipairs(scenes) do
           local cost = pass_ms[cfg.name .. "/" .. pass] or ms_per_frame[c]
           local fixed = math.max(0, ms_per_frame[c] - cost)
           spp = math.max(1, math.floor((target_ms - fixed) / cost + 0.5))
+          -- The corrections split each measured frame into the spp pass and the rest: where the
+          -- rest dominates (an L1 solve), frame-to-frame noise in it would swamp the spp cost.
+          local max_spp = (r:params()[cfg.spp_param] or {}).max or math.huge
+          spp = math.min(spp, max_spp)
           for _ = 1, 2 do
             r:set(cfg.spp_param, spp)
             r:frame()
-            local ms = 0
+            local ms, pass_cost = 0, 0
             for _ = 1, 3 do
               r:frame()
-              ms = ms + r:timings().frame_ms / 3
+              local t = r:timings()
+              ms = ms + t.frame_ms / 3
+              for _, p in ipairs(t.passes) do
+                if p.pass == pass then pass_cost = pass_cost + p.ms / 3 end
+              end
             end
-            local per_spp = math.max(1e-3, (ms - fixed) / spp)
-            spp = math.max(1, math.floor((target_ms - fixed) / per_spp + 0.5))
+            fixed = math.max(0, ms - pass_cost)
+            local per_spp = math.max(1e-3, pass_cost / spp)
+            spp = math.min(max_spp, math.max(1, math.floor((target_ms - fixed) / per_spp + 0.5)))
           end
           r:set(cfg.spp_param, spp)
         end
         local sum_relmse, sum_trim, sum_mape, sum_ms, total_frames = 0, 0, 0, 0, 0
-        local sum_rays, sum_relmse2, sum_flip = 0, 0, 0
+        local sum_rays, sum_relmse2, sum_flip, sum_mse, sum_mse2 = 0, 0, 0, 0, 0
         for rep = 1, repeats do
           r:set_seed(seed + 100 * rep)
           r:set_time(0)
@@ -289,6 +284,8 @@ for _, scene_arg in ipairs(scenes) do
           local relmse = loom.metrics.relmse(img, ref)
           sum_relmse = sum_relmse + relmse
           sum_relmse2 = sum_relmse2 + relmse * relmse
+          local mse = loom.metrics.mse(img, ref)
+          sum_mse, sum_mse2 = sum_mse + mse, sum_mse2 + mse * mse
           sum_trim = sum_trim + trimmed_relmse(img, ref, trim)
           sum_mape = sum_mape + loom.metrics.mape(img, ref)
           sum_flip = sum_flip + loom.metrics.flip(img, ref)
@@ -302,7 +299,7 @@ for _, scene_arg in ipairs(scenes) do
         local row = {index = #rows + 1, scene = name, camera = kind, config = cfg.name,
                      frames = total_frames, gpu_ms = sum_ms, spp = spp,
                      relmse = sum_relmse / repeats, relmse_trim = sum_trim / repeats,
-                     mape = sum_mape / repeats, flip = sum_flip / repeats}
+                     mse = sum_mse / repeats, mape = sum_mape / repeats, flip = sum_flip / repeats}
         rows[#rows + 1] = row
         summary[#summary + 1] = {scene = name, camera = kind, config = cfg.name,
                                  frames = total_frames, gpu_ms = sum_ms, spp = spp,
@@ -310,7 +307,10 @@ for _, scene_arg in ipairs(scenes) do
                                  rays_per_frame = sum_rays / total_frames, relmse = row.relmse,
                                  relmse_se = repeats > 1 and math.sqrt(math.max(0, sum_relmse2
                                      / repeats - row.relmse ^ 2) / (repeats - 1)) or nil,
-                                 relmse_trim = row.relmse_trim, mape = row.mape, flip = row.flip}
+                                 relmse_trim = row.relmse_trim, mse = row.mse,
+                                 mse_se = repeats > 1 and math.sqrt(math.max(0, sum_mse2 / repeats
+                                     - row.mse ^ 2) / (repeats - 1)) or nil,
+                                 mape = row.mape, flip = row.flip}
         loom.progress(#summary, #summary, name .. " " .. kind)
       end
     end
@@ -332,6 +332,11 @@ for _, row in ipairs(summary) do
       -- over this one's (relMSE ~ 1 / time for independent samples).
       if base.spp and row.ms_per_frame and base.ms_per_frame then
         row.ratio_time = base.relmse * base.ms_per_frame / row.ms_per_frame / row.relmse
+        -- MSE, the metric of the gradient-domain papers (relMSE weighs dark pixels up, where a
+        -- gradient-domain solve spreads non-integrable gradient noise: bench/README.md).
+        if base.mse and row.mse and row.mse > 0 then
+          row.ratio_mse_time = base.mse * base.ms_per_frame / row.ms_per_frame / row.mse
+        end
       end
       if base.spp and row.rays_per_frame and base.rays_per_frame and base.rays_per_frame > 0 then
         local spp_equal_rays = row.rays_per_frame / (base.rays_per_frame / base.spp)
@@ -351,11 +356,14 @@ util.print_table({{key = "scene"}, {key = "camera"}, {key = "config"},
                   {key = "relmse", title = "relMSE", fmt = "%.5f"},
                   {key = "relmse_se", title = "(std. err.)", fmt = "%.5f"},
                   {key = "relmse_trim", title = "relMSE trim", fmt = "%.5f"},
+                  {key = "mse", title = "MSE", fmt = "%.5g"},
+                  {key = "mse_se", title = "(std. err.)", fmt = "%.2g"},
                   {key = "mape", title = "MAPE", fmt = "%.4f"},
                   {key = "flip", title = "FLIP", fmt = "%.4f"},
                   {key = "ratio", title = configs[1].name .. "/this relMSE", fmt = "%.2f"},
                   {key = "ratio_trim", title = "(trim)", fmt = "%.2f"},
                   {key = "ratio_time", title = "at equal time (scaled)", fmt = "%.2f"},
+                  {key = "ratio_mse_time", title = "MSE at equal time", fmt = "%.2f"},
                   {key = "rays_per_frame", title = "rays/frame", fmt = "%.0f"},
                   {key = "ratio_rays", title = "at equal rays", fmt = "%.2f"}},
                  summary)
@@ -365,10 +373,11 @@ util.print_table({{key = "scene"}, {key = "config"}, {key = "pass"},
 
 loom.write_csv(out .. "/restir_equal_time.csv", rows,
                {columns = {"index", "scene", "camera", "config", "budget_ms", "gpu_ms",
-                           "frames", "spp", "relmse", "relmse_trim", "mape", "flip"}})
+                           "frames", "spp", "relmse", "relmse_trim", "mse", "mape", "flip"}})
 loom.write_csv(out .. "/summary.csv", summary,
                {columns = {"scene", "camera", "config", "frames", "spp", "gpu_ms",
-                           "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mape", "flip", "ratio",
-                           "ratio_trim", "ratio_time", "rays_per_frame", "spp_equal_rays",
+                           "ms_per_frame", "relmse", "relmse_se", "relmse_trim", "mse", "mse_se",
+                           "mape", "flip", "ratio", "ratio_trim", "ratio_time", "ratio_mse_time",
+                           "rays_per_frame", "spp_equal_rays",
                            "ratio_rays"}})
 print(string.format("\nwrote %s/restir_equal_time.csv, %s/summary.csv and plots", out, out))

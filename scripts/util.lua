@@ -87,6 +87,32 @@ function util.animated_costs(r, frames)
   return c, r:stats()
 end
 
+-- Writes camera keyframes to `path` (JSON for r:camera_path): a swing of `opts.degrees` about
+-- cam's target around its up axis over `opts.frames` frames, ending on cam at time frames - 1.
+-- The start can also be `opts.back` times further from the target (a dolly) with `opts.zoom`
+-- times the field of view.
+function util.swing_path(cam, path, opts)
+  local o, t, u = cam.origin, cam.target, cam.up
+  local len = math.sqrt(u[1] ^ 2 + u[2] ^ 2 + u[3] ^ 2)
+  local k = {u[1] / len, u[2] / len, u[3] / len}
+  local v = {o[1] - t[1], o[2] - t[2], o[3] - t[3]}
+  local keys = {}
+  for i, deg in ipairs({opts.degrees, 0}) do
+    -- Rodrigues' rotation of v about k.
+    local a = math.rad(deg)
+    local c, s = math.cos(a), math.sin(a)
+    local kxv = {k[2] * v[3] - k[3] * v[2], k[3] * v[1] - k[1] * v[3], k[1] * v[2] - k[2] * v[1]}
+    local kdv = k[1] * v[1] + k[2] * v[2] + k[3] * v[3]
+    local back = i == 1 and (opts.back or 1) or 1
+    local origin = {}
+    for j = 1, 3 do origin[j] = t[j] + back * (v[j] * c + kxv[j] * s + k[j] * kdv * (1 - c)) end
+    local fov = i == 1 and math.min(170, cam.fov * (opts.zoom or 1)) or cam.fov
+    keys[i] = {time = (i - 1) * (opts.frames - 1), origin = origin, target = t, up = u,
+               fov = fov}
+  end
+  loom.write_json(path, keys)
+end
+
 -- Prints rows as an aligned text table. columns = {{key=, title=, fmt=}, ...}.
 function util.print_table(columns, rows)
   local cells, widths = {}, {}

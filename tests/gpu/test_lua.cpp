@@ -847,22 +847,23 @@ TEST(LoomRun, ReSTIREqualTimeScript) {
                           "relMSE", "GPU ms per pass", "spatial"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
     script::CsvTable csv = script::readCsv(tmp / "rt/restir_equal_time.csv");
-    EXPECT_EQ(csv.header,
-              (std::vector<std::string>{"index", "scene", "camera", "config", "budget_ms", "gpu_ms",
-                                        "frames", "spp", "relmse", "relmse_trim", "mape", "flip"}));
+    EXPECT_EQ(csv.header, (std::vector<std::string>{
+                              "index", "scene", "camera", "config", "budget_ms", "gpu_ms", "frames",
+                              "spp", "relmse", "relmse_trim", "mse", "mape", "flip"}));
     // Static: 2 configurations x 2 budget steps; still and moving: one row per configuration.
     ASSERT_EQ(csv.rows.size(), 8u);
     int moving = 0, still = 0;
     for (auto& row : csv.rows) {
         EXPECT_EQ(row[1], "cornell_box");
         EXPECT_GT(std::stod(row[8]), 0.0) << "relMSE";
+        EXPECT_GT(std::stod(row[10]), 0.0) << "MSE";
         if (row[2] == "static") {
             EXPECT_GE(std::stod(row[5]), std::stod(row[4])) << "budget met";
         } else {
             ++(row[2] == "still" ? still : moving);
             EXPECT_EQ(row[6], "3") << "frames of the camera swing";
             EXPECT_GE(std::stoi(row[7]), 1) << "spp";
-            double flip = std::stod(row[11]);
+            double flip = std::stod(row[12]);
             EXPECT_GT(flip, 0.0) << "FLIP";
             EXPECT_LT(flip, 1.0) << "FLIP";
         }
@@ -896,6 +897,25 @@ TEST(LoomRun, SmsEqualTimeScript) {
     EXPECT_EQ(script::readCsv(tmp / "se/sms_regions.csv").rows.size(), 24u);  // 6 x 2 x 2
     for (const char* f : {"se/curved_mirror_mask.png", "se/curved_mirror_caustic_relmse.svg"})
         EXPECT_TRUE(fs::exists(tmp / f)) << f;
+}
+
+// The reconstruction error split into its primal and gradient parts, for both gradient graphs.
+TEST(LoomRun, GradientErrorSplitScript) {
+    TempDir tmp("loom-run");
+    auto r = runLoom("run " + script("gradient_error_split.lua") +
+                         " scene=scenes/cornell_box.json width=16 height=16 repeats=1 move_frames=3"
+                         " ref_frames=1 ref_spp=4 direct_frames=2 out=gs",
+                     tmp);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* s : {"solve of the exact inputs", "ReSTIR G-PT", "gradient after ReSTIR",
+                          "exact gradients", "exact primal", "non-integrable"})
+        EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+    script::CsvTable csv = script::readCsv(tmp / "gs/gradient_error_split.csv");
+    ASSERT_EQ(csv.rows.size(), 2u);
+    ASSERT_EQ(csv.header[0], "scene");
+    for (auto& row : csv.rows)
+        for (size_t c = 2; c < row.size(); ++c) EXPECT_GE(std::stod(row[c]), 0.0) << csv.header[c];
+    EXPECT_TRUE(fs::exists(tmp / "gs/cornell_box_ReSTIR_G_PT_gradient_error.png"));
 }
 
 }  // namespace
