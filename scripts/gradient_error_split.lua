@@ -177,15 +177,16 @@ for c, cfg in ipairs(configs) do
       r:set_time(f)
       r:frame()
     end
-    local files = {}
+    local files, images = {}, {}
     for i, port in ipairs({ports.primal, ports.dx, ports.dy}) do
       files[i] = string.format("%s/estimate_%d.exr", out, i)
-      r:image(port):write(files[i])
+      images[i] = r:image(port)
+      images[i]:write(files[i])
     end
     local full = r:image(node .. ".output")
     local with_exact_gradients = solve({files[1], ref_files[2], ref_files[3]}, poisson)
     local with_exact_primal = solve({ref_files[1], files[2], files[3]}, poisson)
-    local dx, dy = r:image(ports.dx), r:image(ports.dy)
+    local dx, dy = images[2], images[3]
     local gmse = gradient_mse(dx, dy, rdx, rdy)
     local v = {
       mse = loom.metrics.mse(full, exact), relmse = loom.metrics.relmse(full, exact),
@@ -193,7 +194,7 @@ for c, cfg in ipairs(configs) do
       relmse_primal_part = loom.metrics.relmse(with_exact_gradients, exact),
       mse_gradient_part = loom.metrics.mse(with_exact_primal, exact),
       relmse_gradient_part = loom.metrics.relmse(with_exact_primal, exact),
-      primal_relmse = loom.metrics.relmse(r:image(ports.primal), exact), gradient_mse = gmse,
+      primal_relmse = loom.metrics.relmse(images[1], exact), gradient_mse = gmse,
       non_integrable = mean_squared_curl(dx, dy) / (4 * gmse)}
     for _, k in ipairs(keys) do sum[k] = sum[k] + v[k] / repeats end
     if rep == 1 then
