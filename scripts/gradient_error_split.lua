@@ -18,8 +18,9 @@
 -- reconstruction with exact primal (OUT/<config>_gradient_error.png: relMSE map).
 local util = require("util")
 
-local scene = util.resolve(loom.arg("scene", "scenes/glossy_spheres.json"))
-if not scene then error("scene: file not found") end
+local scene_arg = loom.arg("scene", "scenes/glossy_spheres.json")
+local scene = util.resolve(scene_arg)
+if not scene then error("scene: file not found: " .. scene_arg) end
 local W, H = loom.arg("width", 64), loom.arg("height", 64)
 local repeats = loom.arg("repeats", 6)
 local move_frames, move_degrees = loom.arg("move_frames", 8), loom.arg("move_degrees", 8.0)
