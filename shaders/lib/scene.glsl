@@ -123,6 +123,28 @@ vec3 previous_position(uint shape, vec3 p) {
                 dot(scene_shape_motion[3u * shape + 2u], h));
 }
 
+// The bilinear cell of a bitmap texture at uv (wrap-around; uv origin at the top-left texel
+// row 0): the four texels' indices and the weights between them. Within a cell the lookup is
+// smooth; its derivative jumps across cells.
+struct TextureCell {
+    uvec4 texel;  // t00, t10, t01, t11 (offsets into scene_texels)
+    vec2 w;       // bilinear weights
+    ivec2 cell;   // which cell
+};
+
+TextureCell texture_cell(TextureGpu t, vec2 uv) {
+    vec2 st = fract(uv) * vec2(t.width, t.height) - 0.5;
+    TextureCell c;
+    ivec2 i0 = ivec2(floor(st));
+    c.w = st - vec2(i0);
+    ivec2 size = ivec2(t.width, t.height);
+    ivec2 a = (i0 % size + size) % size, b = (a + 1) % size;
+    c.texel = t.offset + uvec4(a.y * size.x + a.x, a.y * size.x + b.x, b.y * size.x + a.x,
+                               b.y * size.x + b.x);
+    c.cell = a;
+    return c;
+}
+
 // Bilinear texture lookup with wrap-around (uv origin at the top-left texel row 0).
 vec4 texture_fetch(uint tex, vec2 uv) {
     TextureGpu t = scene_textures[tex];
@@ -133,16 +155,34 @@ vec4 texture_fetch(uint tex, vec2 uv) {
         vec2 f = fract(uv);
         return ((f.x < 0.5) == (f.y < 0.5)) ? t.color0 : t.color1;
     }
-    vec2 st = fract(uv) * vec2(t.width, t.height) - 0.5;
-    ivec2 i0 = ivec2(floor(st));
-    vec2 w = st - vec2(i0);
-    ivec2 size = ivec2(t.width, t.height);
-    ivec2 a = (i0 % size + size) % size, b = (a + 1) % size;
-    vec4 t00 = scene_texels[t.offset + uint(a.y * size.x + a.x)];
-    vec4 t10 = scene_texels[t.offset + uint(a.y * size.x + b.x)];
-    vec4 t01 = scene_texels[t.offset + uint(b.y * size.x + a.x)];
-    vec4 t11 = scene_texels[t.offset + uint(b.y * size.x + b.x)];
-    return mix(mix(t00, t10, w.x), mix(t01, t11, w.x), w.y);
+    TextureCell c = texture_cell(t, uv);
+    vec4 t00 = scene_texels[c.texel.x], t10 = scene_texels[c.texel.y];
+    vec4 t01 = scene_texels[c.texel.z], t11 = scene_texels[c.texel.w];
+    return mix(mix(t00, t10, c.w.x), mix(t01, t11, c.w.x), c.w.y);
+}
+
+// texture_fetch with its partial derivatives along texture u and v (within the bilinear cell;
+// constant and checkerboard textures have none). Manifold walks differentiate normal maps.
+vec4 texture_fetch_grad(uint tex, vec2 uv, out vec4 d_du, out vec4 d_dv) {
+    d_du = vec4(0.0);
+    d_dv = vec4(0.0);
+    TextureGpu t = scene_textures[tex];
+    if (t.kind == 1u || t.kind == 2u) return texture_fetch(tex, uv);
+    TextureCell c = texture_cell(t, uv * t.uv_scale.xy);
+    vec4 t00 = scene_texels[c.texel.x], t10 = scene_texels[c.texel.y];
+    vec4 t01 = scene_texels[c.texel.z], t11 = scene_texels[c.texel.w];
+    vec2 scale = vec2(t.width, t.height) * t.uv_scale.xy;  // d st / d uv
+    d_du = mix(t10 - t00, t11 - t01, c.w.y) * scale.x;
+    d_dv = mix(t01 - t00, t11 - t10, c.w.x) * scale.y;
+    return mix(mix(t00, t10, c.w.x), mix(t01, t11, c.w.x), c.w.y);
+}
+
+// Which bilinear cell texture_fetch reads at uv (ivec2(0) for procedural textures): finite
+// differences of a lookup are only valid within one cell.
+ivec2 texture_cell_at(uint tex, vec2 uv) {
+    TextureGpu t = scene_textures[tex];
+    if (t.kind == 1u || t.kind == 2u) return ivec2(0);
+    return texture_cell(t, uv * t.uv_scale.xy).cell;
 }
 
 // A point on a triangle with its first-order differential geometry. The partials are with
@@ -169,6 +209,14 @@ void triangle_positions(uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     p0 = scene_vertex(tri.x).position_u.xyz;
     p1 = scene_vertex(tri.y).position_u.xyz;
     p2 = scene_vertex(tri.z).position_u.xyz;
+}
+
+void triangle_uvs(uint prim, out vec2 uv0, out vec2 uv1, out vec2 uv2) {
+    uvec4 tri = scene_triangles[prim];
+    VertexGpu v0 = scene_vertex(tri.x), v1 = scene_vertex(tri.y), v2 = scene_vertex(tri.z);
+    uv0 = vec2(v0.position_u.w, v0.normal_v.w);
+    uv1 = vec2(v1.position_u.w, v1.normal_v.w);
+    uv2 = vec2(v2.position_u.w, v2.normal_v.w);
 }
 
 // Barycentrics (u, v) of the point of triangle prim's plane nearest to p (least squares; p on

@@ -40,6 +40,27 @@ void scene_set_time(float time) {
 vec3 shading_to_local(ShadingPoint s, vec3 w) { return vec3(dot(w, s.t), dot(w, s.b), dot(w, s.n)); }
 vec3 shading_to_world(ShadingPoint s, vec3 w) { return w.x * s.t + w.y * s.b + w.z * s.n; }
 
+// The tangent frame (t, b) about the shading normal n: dp/du made orthogonal to n
+// (Gram-Schmidt), or any frame where dp/du is along n.
+void shading_tangent_frame(vec3 n, vec3 tangent, out vec3 t, out vec3 b) {
+    vec3 a = tangent - n * dot(n, tangent);
+    float len = length(a);
+    if (len > 1e-12) {
+        t = a / len;
+        b = cross(n, t);
+    } else {
+        orthonormal_basis(n, t, b);
+    }
+}
+
+// Tangent-space normal map (Mitsuba normalmap): the texel rgb holds the normal as 2 rgb - 1 in
+// the frame (t, b, n) of the interpolated normal n. Manifold walks differentiate the same
+// expression (manifold/walk.glsl manifold_vertex).
+vec3 normal_map_normal(vec3 rgb, vec3 n, vec3 t, vec3 b) {
+    vec3 nt = 2.0 * rgb - 1.0;
+    return normalize(nt.x * t + nt.y * b + nt.z * n);
+}
+
 ShadingPoint shading_point(Hit hit) {
     ShadingPoint s;
     s.sp = surface_point(hit.prim, hit.bary);
@@ -52,20 +73,10 @@ ShadingPoint shading_point(Hit hit) {
     uint spec_tex = material_specular_texture(s.mat);
     if (spec_tex != MATERIAL_NO_TEXTURE) s.mat.specular.rgb = texture_fetch(spec_tex, s.sp.uv).rgb;
     s.n = s.sp.ns;
-    // Tangent frame from dp/du, Gram-Schmidt against the shading normal.
-    vec3 t = s.sp.tangent - s.n * dot(s.n, s.sp.tangent);
-    float len = length(t);
-    if (len > 1e-12) {
-        s.t = t / len;
-        s.b = cross(s.n, s.t);
-    } else {
-        orthonormal_basis(s.n, s.t, s.b);
-    }
+    shading_tangent_frame(s.n, s.sp.tangent, s.t, s.b);
     uint nmap = material_normal_map(s.mat);
     if (nmap != MATERIAL_NO_TEXTURE) {
-        // Tangent-space normal map (Mitsuba normalmap): n = 2 rgb - 1 in (dp/du, n x dp/du, n).
-        vec3 nt = 2.0 * texture_fetch(nmap, s.sp.uv).rgb - 1.0;
-        vec3 n = normalize(nt.x * s.t + nt.y * s.b + nt.z * s.n);
+        vec3 n = normal_map_normal(texture_fetch(nmap, s.sp.uv).rgb, s.n, s.t, s.b);
         if (!any(isnan(n)) && !any(isinf(n))) {
             s.n = n;
             vec3 t2 = s.t - s.n * dot(s.n, s.t);
