@@ -10,14 +10,13 @@
 #   bash bench/sms_table1.sh                          # 256x256, Table 1 only
 #   EQUAL_TIME=1 WIDTH=64 HEIGHT=64 BUDGET_MS=4000 bash bench/sms_table1.sh
 #
-# Scenes: the project's glass sphere, curved mirror, wavy slab (both faces wavy) and the slab with
-# a flat bottom (scenes/refractive_caustic.json),
-# and, when ../shared/scenes is present, sms-plane and sms-sphere (their casters are
-# normal-mapped, which the walk does not model yet: those rows say so).
+# Scenes: the project's glass sphere, curved mirror, wavy slab (both faces wavy), the slab with
+# a flat bottom (scenes/refractive_caustic.json) and the normal-mapped water surface, and, when
+# ../shared/scenes is present, sms-plane and sms-sphere (normal-mapped casters, as in the paper).
 source "$(dirname "$0")/lib.sh"
 W=${WIDTH:-256} H=${HEIGHT:-256} FRAMES=${FRAMES:-4}
 uptime
-scenes="scenes/glass_sphere.json scenes/curved_mirror.json scenes/wavy_slab.json scenes/refractive_caustic.json"
+scenes="scenes/glass_sphere.json scenes/curved_mirror.json scenes/wavy_slab.json scenes/refractive_caustic.json scenes/normal_mapped_water.json"
 for s in ../shared/scenes/sms-plane/plane_sms_constfloor.xml ../shared/scenes/sms-sphere/sphere_sms_constfloor.xml; do
     [ -e "$s" ] && scenes="$scenes $s"
 done

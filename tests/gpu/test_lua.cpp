@@ -918,4 +918,20 @@ TEST(LoomRun, GradientErrorSplitScript) {
     EXPECT_TRUE(fs::exists(tmp / "gs/cornell_box_ReSTIR_G_PT_gradient_error.png"));
 }
 
+// The committed normal map of scenes/normal_mapped_water.json is what its generator writes.
+TEST(LoomRun, RippleNormalMapScriptWritesTheCommittedMap) {
+    TempDir tmp("loom-run");
+    auto r = runLoom("run " + script("make_ripple_normal_map.lua") + " out=ripples.exr", tmp);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    ImageData made = readImage(tmp / "ripples.exr");
+    ImageData committed = readImage(fs::path(kSource) / "scenes/textures/ripples_normal.exr");
+    ASSERT_EQ(made.width, committed.width);
+    ASSERT_EQ(made.height, committed.height);
+    ASSERT_EQ(made.pixels.size(), committed.pixels.size());
+    double worst = 0;
+    for (size_t i = 0; i < made.pixels.size(); ++i)
+        worst = std::max(worst, double(std::abs(made.pixels[i] - committed.pixels[i])));
+    EXPECT_LT(worst, 1e-3) << "rerun scripts/make_ripple_normal_map.lua and commit the map";
+}
+
 }  // namespace

@@ -5,7 +5,9 @@
 // re-interpolated) or one end point at a time. Input rows, per column: 0 (x0, constraint),
 // 1 (y, end at infinity), 2 (vertex 0 point, triangle), 3 (vertex 1 point, triangle),
 // 4 (es, k), 5 (et, from_light), 6 (h, 0, 0, 0). Output row 6 i + j: (analytic, difference) of
-// column j of row i, j = 0..5 (previous, this, next vertex; each along its two parameters).
+// column j of row i, j = 0..5 (previous, this, next vertex; each along its two parameters);
+// vec4(-1e30) where the differences of a normal-mapped vertex leave its bilinear texel cell
+// (the map's derivative jumps there).
 #include "lib/bvh.glsl"
 #include "lib/manifold/walk.glsl"
 
@@ -25,6 +27,13 @@ ManifoldVertex vertex_at(uint prim, vec3 p) {
     vec2 r = vec2(dot(sp.dp_du, d), dot(sp.dp_dv, d));
     vec2 b = vec2(g22 * r.x - g12 * r.y, g11 * r.y - g12 * r.x) / (g11 * g22 - g12 * g12);
     return manifold_vertex(prim, b);
+}
+
+// The normal map's bilinear cell at vertex v (ivec2(-1) without a map).
+ivec2 normal_map_cell(ManifoldVertex v) {
+    uint nmap = material_normal_map(scene_materials[scene_shapes[v.shape].material]);
+    if (nmap == MATERIAL_NO_TEXTURE) return ivec2(-1);
+    return texture_cell_at(nmap, surface_point(v.prim, triangle_barycentrics(v.prim, v.p)).uv);
 }
 
 vec2 constraint_of(uint kind, ManifoldChain c, vec3 x0, vec3 y, uint i) {
@@ -61,6 +70,7 @@ void main() {
             // Central differences at h and 2h, Richardson-extrapolated (error O(h^4)): near the
             // critical angle inside the sphere the O(h^2) term alone reaches 1e-3 at h = 1e-3.
             vec2 diff[2] = vec2[2](vec2(0.0), vec2(0.0));
+            bool one_cell = true;
             for (int q = 0; q < 2; ++q)
                 for (int sgn = -1; sgn <= 1; sgn += 2) {
                     ManifoldChain d = c;
@@ -73,13 +83,14 @@ void main() {
                     } else {
                         ManifoldVertex v = c.v[m];
                         d.v[m] = vertex_at(v.prim, v.p + e * ((j & 1u) != 0u ? v.t : v.s));
+                        one_cell = one_cell && all(equal(normal_map_cell(d.v[m]), normal_map_cell(v)));
                     }
                     diff[q] += float(sgn) * constraint_of(kind, d, x0 + dx0, y + dy, i) /
                                (2.0 * h * float(q + 1));
                 }
             vec2 extrapolated = (4.0 * diff[0] - diff[1]) / 3.0;
             imageStore(outputImage, ivec2(x, 6 * int(i) + int(j)),
-                       ok ? vec4(analytic, extrapolated) : vec4(1e30));
+                       !ok ? vec4(1e30) : one_cell ? vec4(analytic, extrapolated) : vec4(-1e30));
         }
     }
 }

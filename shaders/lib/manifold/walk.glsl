@@ -43,6 +43,50 @@ bool manifold_material_specular(Material m) {
     return t == MATERIAL_CONDUCTOR || t == MATERIAL_DIELECTRIC;
 }
 
+// A normal-mapped vertex: the shading normal the path tracer scatters about
+// (shading.glsl normal_map_normal) and its derivatives along s and t, whose barycentric rates
+// are bary_s, bary_t. Three parts change: the texel normal (bilinear: smooth within a texel
+// cell), the interpolated normal, and the tangent frame, which is dp/du made orthogonal to the
+// interpolated normal. (The frame's fallback for degenerate UVs, which has no texture
+// variation to follow, is taken as fixed.)
+void manifold_normal_map(inout ManifoldVertex v, SurfacePoint sp, uint nmap, vec2 bary_s,
+                         vec2 bary_t) {
+    vec2 uv0, uv1, uv2;
+    triangle_uvs(sp.prim, uv0, uv1, uv2);
+    vec2 duv_s = (uv1 - uv0) * bary_s.x + (uv2 - uv0) * bary_s.y;
+    vec2 duv_t = (uv1 - uv0) * bary_t.x + (uv2 - uv0) * bary_t.y;
+    vec4 g_u, g_v;
+    vec3 nt = 2.0 * texture_fetch_grad(nmap, sp.uv, g_u, g_v).rgb - 1.0;
+    vec3 dnt_s = 2.0 * (g_u.rgb * duv_s.x + g_v.rgb * duv_s.y);
+    vec3 dnt_t = 2.0 * (g_u.rgb * duv_t.x + g_v.rgb * duv_t.y);
+#ifdef LOOM_TEST_NORMAL_MAP_CONSTANT_TEXELS  // the ablation the SMS tests must detect
+    dnt_s = vec3(0.0);
+    dnt_t = vec3(0.0);
+#endif
+    vec3 ns = sp.ns, T, B;
+    shading_tangent_frame(ns, sp.tangent, T, B);
+    vec3 m = nt.x * T + nt.y * B + nt.z * ns;
+    float m_len = length(m);
+    if (!(m_len > 0.0)) return;  // a broken texel: the path tracer keeps the interpolated normal too
+    vec3 n = m / m_len;
+    vec3 a = sp.tangent - ns * dot(ns, sp.tangent);
+    float a_len = length(a);
+    vec3 dn[2];
+    for (int i = 0; i < 2; ++i) {
+        vec3 dns = i == 0 ? v.dn_ds : v.dn_dt, dnt = i == 0 ? dnt_s : dnt_t;
+        vec3 dT = a_len > 1e-12
+                      ? manifold_d_normalize(T, a_len, -(dns * dot(ns, sp.tangent) +
+                                                         ns * dot(dns, sp.tangent)))
+                      : vec3(0.0);
+        vec3 dB = cross(dns, T) + cross(ns, dT);
+        vec3 dm = dnt.x * T + nt.x * dT + dnt.y * B + nt.y * dB + dnt.z * ns + nt.z * dns;
+        dn[i] = manifold_d_normalize(n, m_len, dm);
+    }
+    v.n = n;
+    v.dn_ds = dn[0];
+    v.dn_dt = dn[1];
+}
+
 ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     SurfacePoint sp = surface_point(prim, bary);
     Material m = scene_materials[scene_shapes[sp.shape].material];
@@ -65,6 +109,8 @@ ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     v.tangent = sp.dp_du;
     v.reflection = material_type(m) == MATERIAL_CONDUCTOR;
     v.eta = material_eta(m);
+    uint nmap = material_normal_map(m);
+    if (nmap != MATERIAL_NO_TEXTURE) manifold_normal_map(v, sp, nmap, uv_s, uv_t);
     return v;
 }
 
