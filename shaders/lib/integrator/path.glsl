@@ -32,6 +32,14 @@ struct PathRadiance {
     uint rays;      // closest-hit and shadow rays traced
     bool found;     // the camera ray hit a surface
     Hit first;      // that hit
+    // The path's first vertex with a smooth lobe (everything before it purely specular): where
+    // a caustic estimator adds what the path leaves out (manifold/coverage.glsl receivers seen
+    // through specular surfaces), with the throughput and direction the path arrived with.
+    bool smooth_found;
+    Hit smooth_hit;
+    uint smooth_depth;  // specular vertices before it
+    vec3 smooth_beta;   // throughput up to it (Russian roulette included)
+    vec3 smooth_wo;     // unit direction from it back along the path
 };
 
 // What a path carries from one vertex to the next: the ray to trace, the throughput and what
@@ -79,6 +87,11 @@ PathRadiance path_radiance_none() {
     r.first.t = 0.0;
     r.first.prim = ~0u;
     r.first.bary = vec2(0.0);
+    r.smooth_found = false;
+    r.smooth_hit = r.first;
+    r.smooth_depth = 0u;
+    r.smooth_beta = vec3(0.0);
+    r.smooth_wo = vec3(0.0);
     return r;
 }
 
@@ -127,6 +140,13 @@ bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit
     vec3 wo = shading_to_local(sh, -st.d);
     uint flags = bsdf_flags(sh.mat);
     bool has_smooth = (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
+    if (has_smooth && !r.smooth_found) {
+        r.smooth_found = true;
+        r.smooth_hit = hit;
+        r.smooth_depth = st.depth;
+        r.smooth_beta = st.beta;
+        r.smooth_wo = -st.d;
+    }
 
     // Next-event estimation.
     vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
