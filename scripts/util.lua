@@ -33,6 +33,7 @@ end
 -- give such references their own `opts.path`. `opts.shutter` ({open, close}, frames) sets the
 -- camera's shutter (with params["pt.motionBlur"] = true: a motion-blurred reference).
 -- `opts.camera` ({origin, target, up, fov}) replaces the scene camera and its path.
+-- A graph without a path tracer (e.g. graphs/sms.json) takes spp = 0 (one estimate per frame).
 function util.reference(opts)
   local path = opts.path
   if path == nil then
@@ -61,9 +62,9 @@ function util.reference(opts)
   end
   local img = r:image("accum.output")
   if path and path ~= "" then img:write(path) end
-  print(string.format("reference: rendered %d frames x %d spp (%.0f ms GPU)%s", opts.frames,
-                      r:get("pt.samplesPerPixel"), gpu_ms,
-                      path and path ~= "" and (" -> " .. path) or ""))
+  local spp = (opts.spp and opts.spp > 0) and r:get("pt.samplesPerPixel") or 1
+  print(string.format("reference: rendered %d frames x %d spp (%.0f ms GPU)%s", opts.frames, spp,
+                      gpu_ms, path and path ~= "" and (" -> " .. path) or ""))
   r:close()
   return img
 end

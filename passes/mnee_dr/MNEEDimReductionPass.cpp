@@ -50,11 +50,7 @@ public:
                 "edge");
         r.param("bothDirections", true)
             .doc("when the walk fails one way from the start point, walk the other way");
-        r.param("receiverDepth", 2)
-            .range(0, 8)
-            .doc(
-                "purely specular vertices the camera may see a receiver through (0: primary "
-                "hits only; 1: a pool floor under water)");
+        reflectReceiverDepth(r);
         reflectCoveredPathTracer(r);
     }
 

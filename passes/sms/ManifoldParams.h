@@ -32,6 +32,16 @@ inline void reflectCoveredPathTracer(PassReflection& r) {
             "double counts them)");
 }
 
+// Where the caustic estimator runs: receivers the camera sees directly or through purely
+// specular surfaces (a pool floor under water); the path tracer leaves out the same paths.
+inline void reflectReceiverDepth(PassReflection& r) {
+    r.param("receiverDepth", 2)
+        .range(0, 8)
+        .doc(
+            "purely specular vertices the camera may see a receiver through (0: primary "
+            "hits only; 1: a pool floor under water)");
+}
+
 // The chain, the generalized geometric term's clamp, the path tracer without the covered paths,
 // and how far one frame's walks may run (trialDispatches: the pass's default).
 inline void reflectCausticPath(PassReflection& r, int trialDispatches) {

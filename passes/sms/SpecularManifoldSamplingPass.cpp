@@ -1,6 +1,7 @@
 // SpecularManifoldSampling: caustics by specular manifold sampling (Zeltner et al. 2020),
-// unbiased or biased, or MNEE (Hanika et al. 2015), at the primary receivers of a path tracer
-// that leaves out exactly the paths SMS produces. See README.md.
+// unbiased or biased, or MNEE (Hanika et al. 2015), at the receivers a path tracer's camera
+// path reaches through purely specular surfaces; the path tracer leaves out exactly the paths
+// SMS produces. See README.md.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -21,7 +22,7 @@ namespace loom {
 
 namespace {
 
-constexpr uint64_t kPixelBytes = 128;        // SmsPixel (sms_common.glsl)
+constexpr uint64_t kPixelBytes = 144;        // SmsPixel (sms_common.glsl)
 constexpr uint64_t kSolutionSetBytes = 512;  // SmsSolutionSet: 32 directions
 constexpr int kMaxBiasedTrials = 32;
 
@@ -36,7 +37,7 @@ public:
             .doc("full image: path tracer without the SMS-covered paths + caustic");
         r.outputTexture("caustic", gpu::Format::RGBA32F)
             .optional()
-            .doc("the SMS estimate alone (caustics at primary receivers)");
+            .doc("the SMS estimate alone (caustics at receivers, through the specular prefix)");
         r.outputTexture("stats", gpu::Format::RGBA32F)
             .optional()
             .doc("per pixel: Newton iterations, solution found, trials, SMS estimate taken");
@@ -60,6 +61,7 @@ public:
             .doc("at the cap: drop the sample (reference code) or keep it with K = maxTrials");
         r.param("biasedTrials", 4).range(1, kMaxBiasedTrials).doc("biased: trials M per estimate");
         reflectCausticPath(r, 64);
+        reflectReceiverDepth(r);
     }
     void execute(ExecuteContext& ctx) override {
         const auto& scene = ctx.scene();

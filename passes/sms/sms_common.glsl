@@ -25,6 +25,7 @@ layout(push_constant) uniform Params {
     uint rrDepth;
     uint misHeuristic;
     uint excludeCovered;
+    uint receiverDepth;        // SMS at the first smooth vertex behind at most this many specular ones
     uint stepBudget;           // BVH steps an invocation may start a new trial below
     float minSegment;          // world units (pass: 1e-4 x scene radius)
     uint dispatchIndex;        // sms_trials.comp: which of the frame's trial dispatches
@@ -45,6 +46,7 @@ struct SmsPixel {
     vec4 target;   // xyz the solution's first direction (unbiased), w trials so far (K)
     vec4 value;    // rgb the estimate (unbiased: the solution's contribution), w solutions
     uvec4 counts;  // x Newton iterations, y trials, z solution found, w trial cap reached
+    vec4 beta;     // rgb the camera path's throughput up to x0 (1 at a primary receiver)
 };
 layout(std430) buffer SmsPixels { SmsPixel sms_pixels[]; };
 // Biased SMS: the directions of the unique solutions found so far (biasedTrials <= 32).

@@ -1,7 +1,10 @@
 #version 460
 // SpecularManifoldSampling, stage 1: the camera path by the reference path tracer without the
-// paths SMS covers (manifold/coverage.glsl), and, at a primary receiver, the light sample an
-// SMS estimate connects to. Stage 2 (sms_trials.comp) runs the estimate's walks.
+// paths SMS covers (manifold/coverage.glsl), and, at the path's receiver (its first vertex with
+// a smooth lobe, behind at most receiverDepth specular vertices), the light sample an SMS
+// estimate connects to. The estimate takes the path's own specular prefix: the path part
+// leaves out the covered paths behind exactly that prefix, and the prefix's throughput weighs
+// the estimate. Stage 2 (sms_trials.comp) runs the estimate's walks.
 #include "lib/camera.glsl"
 #include "lib/integrator/path.glsl"
 #include "lib/rng.glsl"
@@ -28,7 +31,7 @@ void main() {
     ps.nee = true;
     ps.mis = true;
     ps.covered_max_chain = pc.excludeCovered != 0u ? min(pc.maxChain, uint(MANIFOLD_MAX_VERTICES)) : 0u;
-    ps.covered_depth = 0u;
+    ps.covered_depth = pc.receiverDepth;
     Hit none;
     none.t = 0.0;
     none.prim = ~0u;
@@ -45,15 +48,18 @@ void main() {
     st.target = vec4(0.0);
     st.value = vec4(0.0);
     st.counts = uvec4(0u);
-    if (pr.found) {
-        ShadingPoint sh = shading_point(pr.first);
+    st.beta = vec4(0.0);
+    if (pr.smooth_found && pr.smooth_depth <= pc.receiverDepth) {
+        ShadingPoint sh = shading_point(pr.smooth_hit);
         if (manifold_receiver(sh.shape_flags, sh.mat)) {
             // A stream of its own: the path part stays the path tracer's image.
             Rng srng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x5A17C0DEu);
             ManifoldLight ml = manifold_sample_light(vec3(rng_next2(srng), rng_next(srng)));
             if (ml.valid) {
-                st.hit = uvec4(pr.first.prim, floatBitsToUint(pr.first.bary),
+                st.hit = uvec4(pr.smooth_hit.prim, floatBitsToUint(pr.smooth_hit.bary),
                                pc.estimator == ESTIMATOR_BIASED ? SMS_BIASED : SMS_FIRST);
+                st.wo = vec4(pr.smooth_wo, 0.0);
+                st.beta = vec4(pr.smooth_beta, 0.0);
                 st.rng = srng.state;
                 st.light_y = vec4(ml.y, ml.pdf);
                 st.light_n = vec4(ml.n, uintBitsToFloat(ml.light));

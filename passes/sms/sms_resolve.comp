@@ -28,6 +28,9 @@ void main() {
         st.counts.w = 1u;
         caustic = pc.trialCap == TRIAL_CAP_DROP ? vec3(0.0) : st.value.rgb * st.target.w;
     }
+#ifndef LOOM_TEST_SMS_PREFIX_UNWEIGHTED  // the ablation the SMS tests must detect
+    caustic *= st.beta.rgb;  // the camera path's specular prefix
+#endif
     vec3 path = imageLoad(pathImage, ivec2(pixel)).rgb;
 #if HAS_CAUSTIC
     imageStore(causticImage, ivec2(pixel), vec4(caustic, 1.0));

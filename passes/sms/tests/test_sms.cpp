@@ -14,6 +14,7 @@
 
 #include "core/graph/Renderer.h"
 #include "core/image/Image.h"
+#include "core/scene/Camera.h"
 #include "core/scene/SceneLoader.h"
 #include "tests/support/CausticScenes.h"
 #include "tests/support/GpuSupport.h"
@@ -637,6 +638,25 @@ TEST(SpecularManifoldSampling, NormalMapDerivativeLeftOutIsDetected) {
                         << c.pt;
     std::printf("normal map derivative left out: worst |z| %.1f (sms %.5f, pt %.5f)\n", c.z, c.sms,
                 c.pt);
+}
+
+// Receivers behind the camera path's specular prefix (receiverDepth): flat water (the
+// normal-mapped scene without its map: one solution with a wide basin per floor point, so the
+// estimate is nearly noiseless and the test's power is the path tracer's) seen from above, its
+// floor through the surface. The estimate must carry the prefix's throughput: without it
+// (LOOM_TEST_SMS_PREFIX_UNWEIGHTED) the floor under water brightens by 1 / beta.
+TEST(SpecularManifoldSampling, UnbiasedAtReceiversSeenThroughWaterAgainstThePathTracer) {
+    auto scene = scene::loadScene(sourcePath("scenes/normal_mapped_water.json"));
+    for (auto& m : scene.materials) m.normalMap = -1;
+    scene.camera.toWorld = scene::lookAtMatrix({0, 2.2f, 1.6f}, {0, 0, -0.1f}, {0, 1, 0});
+    auto c = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
+    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+    ::setenv("LOOM_SHADER_DEFINES", "LOOM_TEST_SMS_PREFIX_UNWEIGHTED=1", 1);
+    auto u = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
+    ::unsetenv("LOOM_SHADER_DEFINES");
+    EXPECT_GT(u.z, 6.0) << "the prefix's throughput went unseen: sms " << u.sms << " pt " << u.pt;
+    std::printf("prefix throughput left out: worst |z| %.1f (sms %.5f, pt %.5f)\n", u.z, u.sms,
+                u.pt);
 }
 
 // The bias class the exclusion prevents: with the covered paths left in the path part, the
