@@ -29,7 +29,9 @@ for scene in $scenes; do
         name=$(basename "$scene")
         log=out/psms_table1/$name.$g.log
         node=$([ "$g" = sms ] && echo sms || echo psms)
-        if ! "$LOOM" render graphs/$g.json --scene "$scene" --width "$W" --height "$H" \
+        # psms estimates at primary receivers: SMS here too (its default also sees through glass).
+        extra=$([ "$g" = sms ] && echo "--set sms.receiverDepth=0" || true)
+        if ! "$LOOM" render graphs/$g.json --scene "$scene" --width "$W" --height "$H" $extra \
             --frames "$FRAMES" --timings --output accum.output=out/psms_table1/$name.$g.exr \
             > "$log" 2>&1; then
             printf "%-26s %-14s failed: %s\n" "$name" "$g" "$(grep -m1 error "$log")"
