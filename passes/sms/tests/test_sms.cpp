@@ -598,46 +598,48 @@ UnbiasedCheck compareWithPathTracer(const scene::Scene& scene, const json& overr
     return c;
 }
 
-TEST(SpecularManifoldSampling, UnbiasedOnTheGlassSphereAgainstThePathTracer) {
-    auto scene = scene::loadScene(sourcePath("scenes/glass_sphere.json"));
-    auto c = compareWithPathTracer(scene, {}, 256, 64, 32, 2);
+// SMS against the path tracer (default settings, 64 reference frames of 32 spp, 2 x 2 regions):
+// |z| < 3 everywhere.
+void expectUnbiased(const scene::Scene& scene, int smsFrames, int ptFrames = 64) {
+    auto c = compareWithPathTracer(scene, {}, smsFrames, ptFrames, 32, 2);
     EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
 }
 
+// The same comparison with an ablation compiled in (LOOM_SHADER_DEFINES): it must fail, |z| > 6.
+void expectAblationDetected(const scene::Scene& scene, const char* define, int smsFrames) {
+    ::setenv("LOOM_SHADER_DEFINES", define, 1);
+    auto c = compareWithPathTracer(scene, {}, smsFrames, 64, 32, 2);
+    ::unsetenv("LOOM_SHADER_DEFINES");
+    EXPECT_GT(c.z, 6.0) << define << " went unseen: sms " << c.sms << " pt " << c.pt;
+    std::printf("%s: worst |z| %.1f (sms %.5f, pt %.5f)\n", define, c.z, c.sms, c.pt);
+}
+
+TEST(SpecularManifoldSampling, UnbiasedOnTheGlassSphereAgainstThePathTracer) {
+    expectUnbiased(scene::loadScene(sourcePath("scenes/glass_sphere.json")), 256);
+}
+
 TEST(SpecularManifoldSampling, UnbiasedOnTheCurvedMirrorAgainstThePathTracer) {
-    auto scene = scene::loadScene(sourcePath("scenes/curved_mirror.json"));
-    auto c = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
-    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+    expectUnbiased(scene::loadScene(sourcePath("scenes/curved_mirror.json")), 128);
 }
 
 // Two refractions with normal variation at both vertices (the wavy slab's faces differ).
 TEST(SpecularManifoldSampling, UnbiasedThroughTheWavySlabAgainstThePathTracer) {
-    auto scene = scene::loadScene(sourcePath("scenes/wavy_slab.json"));
     int scale = std::getenv("LOOM_SLAB_SCALE") ? std::atoi(std::getenv("LOOM_SLAB_SCALE")) : 1;
-    auto c = compareWithPathTracer(scene, {}, 128 * scale, 64 * scale, 32, 2);
-    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+    expectUnbiased(scene::loadScene(sourcePath("scenes/wavy_slab.json")), 128 * scale, 64 * scale);
 }
 
 // A normal-mapped caster (the shared SMS scenes' kind): the walk scatters about the mapped
 // normal, as the path tracer does, and differentiates it, texels included.
 TEST(SpecularManifoldSampling, UnbiasedThroughANormalMappedSurfaceAgainstThePathTracer) {
-    auto scene = scene::loadScene(sourcePath("scenes/normal_mapped_water.json"));
-    auto c = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
-    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
+    expectUnbiased(scene::loadScene(sourcePath("scenes/normal_mapped_water.json")), 128);
 }
 
 // The same comparison must see a walk that leaves the texels' change out of the normal's
 // derivative: it still converges to the same chains (Newton with a wrong Jacobian), but the
 // generalized geometric term, which solves with that Jacobian, is wrong.
 TEST(SpecularManifoldSampling, NormalMapDerivativeLeftOutIsDetected) {
-    auto scene = scene::loadScene(sourcePath("scenes/normal_mapped_water.json"));
-    ::setenv("LOOM_SHADER_DEFINES", "LOOM_TEST_NORMAL_MAP_CONSTANT_TEXELS=1", 1);
-    auto c = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
-    ::unsetenv("LOOM_SHADER_DEFINES");
-    EXPECT_GT(c.z, 6.0) << "the normal map's derivative went unseen: sms " << c.sms << " pt "
-                        << c.pt;
-    std::printf("normal map derivative left out: worst |z| %.1f (sms %.5f, pt %.5f)\n", c.z, c.sms,
-                c.pt);
+    expectAblationDetected(scene::loadScene(sourcePath("scenes/normal_mapped_water.json")),
+                           "LOOM_TEST_NORMAL_MAP_CONSTANT_TEXELS=1", 128);
 }
 
 // Receivers behind the camera path's specular prefix (receiverDepth): flat water (the
@@ -650,14 +652,8 @@ TEST(SpecularManifoldSampling, UnbiasedAtReceiversSeenThroughWaterAgainstThePath
     for (auto& m : scene.materials) m.normalMap = -1;
     scene.camera.path.clear();
     scene.camera.toWorld = scene::lookAtMatrix({0, 2.2f, 1.6f}, {0, 0, -0.1f}, {0, 1, 0});
-    auto c = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
-    EXPECT_LT(c.z, 3.0) << "sms " << c.sms << " pt " << c.pt;
-    ::setenv("LOOM_SHADER_DEFINES", "LOOM_TEST_SMS_PREFIX_UNWEIGHTED=1", 1);
-    auto u = compareWithPathTracer(scene, {}, 128, 64, 32, 2);
-    ::unsetenv("LOOM_SHADER_DEFINES");
-    EXPECT_GT(u.z, 6.0) << "the prefix's throughput went unseen: sms " << u.sms << " pt " << u.pt;
-    std::printf("prefix throughput left out: worst |z| %.1f (sms %.5f, pt %.5f)\n", u.z, u.sms,
-                u.pt);
+    expectUnbiased(scene, 128);
+    expectAblationDetected(scene, "LOOM_TEST_SMS_PREFIX_UNWEIGHTED=1", 128);
 }
 
 // The bias class the exclusion prevents: with the covered paths left in the path part, the
