@@ -52,7 +52,8 @@ public:
         r.paramEnum("estimator", "unbiased", {"unbiased", "biased", "mnee"})
             .doc(
                 "unbiased SMS (Bernoulli trials), biased SMS (unique solutions of M trials), or "
-                "MNEE (one walk from the straight line to the light)");
+                "MNEE (one walk from the straight line to the light, or from a reflective "
+                "caster's bounding-box centre)");
         reflectManifoldWalk(r);
         r.param("maxTrials", 10000000)
             .min(1)
@@ -81,6 +82,7 @@ public:
         gpu::Bindings b;
         scene.bind(b);
         b.set("ManifoldCasters", mCasters)
+            .set("SmsMneeSeeds", mMneeSeeds)
             .set("SmsPixels", ctx.scratchBuffer("pixels"))
             .set("SmsSolutions", ctx.scratchBuffer("solutions"))
             .set("SmsCounters", counters)
@@ -151,7 +153,10 @@ private:
         std::vector<std::pair<uint32_t, double>> tris;
         double total = 0.0;
         uint32_t first = 0;
-        bool receivers = false, emitters = false;
+        bool receivers = false, emitters = false, refractors = false;
+        // MNEE's seeds (SmsMneeSeeds): [0].x = 1 when a refractive caster exists (the straight
+        // line to the light), then the bounding-box centre of each reflective caster.
+        std::vector<glm::vec4> mneeSeeds(1, glm::vec4(0.0f));
         for (const auto& shape : s.shapes) {
             const auto& mesh = s.meshes[shape.mesh];
             if (shape.flags & scene::kCausticReceiver) receivers = true;
@@ -159,6 +164,17 @@ private:
                 emitters = true;
             if (shape.flags & (scene::kCausticCasterReflect | scene::kCausticCasterRefract)) {
                 glm::mat4 m = scene::shapeToWorldAt(shape, 0.0f);
+                glm::vec3 lo(1e30f), hi(-1e30f);
+                for (const glm::vec3& p : mesh.positions) {
+                    glm::vec3 w = glm::vec3(m * glm::vec4(p, 1.0f));
+                    lo = glm::min(lo, w);
+                    hi = glm::max(hi, w);
+                }
+                scene::BsdfType type = s.materials[shape.material].type;
+                if (type == scene::BsdfType::Conductor && !mesh.positions.empty())
+                    mneeSeeds.push_back(glm::vec4(0.5f * (lo + hi), 0.0f));
+                else
+                    refractors = true;
                 for (size_t t = 0; t < mesh.indices.size(); ++t) {
                     glm::uvec3 i = mesh.indices[t];
                     glm::vec3 a = glm::vec3(m * glm::vec4(mesh.positions[i.x], 1.0f));
@@ -192,10 +208,13 @@ private:
         data.back().y = 0x3f800000u;  // exactly 1
         mCasters = ctx.gpu().createBuffer(data.size() * sizeof(glm::uvec2), "ManifoldCasters");
         ctx.gpu().uploadBuffer(*mCasters, data.data(), data.size() * sizeof(glm::uvec2));
+        mneeSeeds[0].x = refractors ? 1.0f : 0.0f;
+        mMneeSeeds = ctx.gpu().createBuffer(mneeSeeds.size() * sizeof(glm::vec4), "SmsMneeSeeds");
+        ctx.gpu().uploadBuffer(*mMneeSeeds, mneeSeeds.data(), mneeSeeds.size() * sizeof(glm::vec4));
         mCasterScene = &s;
     }
 
-    std::shared_ptr<gpu::Buffer> mCasters;
+    std::shared_ptr<gpu::Buffer> mCasters, mMneeSeeds;
     gpu::WorkList mWork;
     const scene::Scene* mCasterScene = nullptr;
     gpu::CounterBuffer<8> mCounters{"SmsCounters"};

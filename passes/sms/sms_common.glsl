@@ -56,6 +56,10 @@ struct SmsSolutionSet {
 };
 layout(std430) buffer SmsSolutions { SmsSolutionSet sms_solutions[]; };
 
+// MNEE's seeds: [0].x = 1 when a refractive caster exists, then the bounding-box centre of each
+// reflective caster (SpecularManifoldSamplingPass.cpp).
+layout(std430) readonly buffer SmsMneeSeeds { vec4 sms_mnee_seeds[]; };
+
 // Frame totals (Hong et al. 2025 Table 1 columns are ratios of these).
 layout(std430) buffer SmsCounters {
     uint sms_samples;      // SMS estimates started (receivers with a light sample)

@@ -7,7 +7,10 @@
 //             finds the same solution; the estimate is its contribution times the count K,
 //             E[K] = 1 / p (Sec. 4.5). At maxTrials: dropped (reference code) or kept (trialCap).
 //   biased:   M = biasedTrials walks, each unique solution's contribution once (Sec. 4.5).
-//   mnee:     one walk from the straight line to the light (Hanika et al. 2015).
+//   mnee:     one walk from the straight line to the light (Hanika et al. 2015), or, for a
+//             reflective caster, from its bounding-box centre (the reference code's seed: a
+//             straight line never reflects); one of these seeds per estimate, chosen uniformly
+//             and weighted by their number.
 #include "lib/manifold/sms.glsl"
 #include "lib/rng.glsl"
 #include "passes/sms/sms_common.glsl"
@@ -39,6 +42,7 @@ void main() {
 
     ManifoldTrial tr;
     tr.phase = TRIAL_FAILED;
+    float seed_weight = 1.0;  // MNEE: the number of seed choices
     bool pending = false;  // tr holds a finished trial not yet accounted for
     for (;;) {
         if (!manifold_trial_running(tr)) {
@@ -54,8 +58,8 @@ void main() {
                     for (uint j = 0u; j < found; ++j)
                         wanted = wanted && !manifold_same_solution(dir, sms_solutions[index].dirs[j].xyz,
                                                                    pc.uniquenessThreshold);
-                vec3 value = wanted ? manifold_trial_contribution(tr, ms, sh0, wo, ml,
-                                                                  pc.geometricTermClamp)
+                vec3 value = wanted ? seed_weight * manifold_trial_contribution(
+                                                        tr, ms, sh0, wo, ml, pc.geometricTermClamp)
                                     : vec3(0.0);
                 if (status == SMS_FIRST) {
                     if (!ok) {
@@ -101,8 +105,19 @@ void main() {
             // The next trial: a fresh seed on the casters, or MNEE's straight line.
             vec3 u = vec3(rng_next2(rng), rng_next(rng));
             bool straight = pc.estimator == ESTIMATOR_MNEE;
+            vec3 seed = straight ? ml.y : manifold_sample_caster(u);
+            if (straight) {
+                uint line = sms_mnee_seeds[0].x != 0.0 ? 1u : 0u;
+                uint choices = uint(sms_mnee_seeds.length()) - 1u + line;
+                uint k = min(uint(u.z * float(choices)), choices - 1u);
+                seed_weight = float(choices);
+                if (k >= line) {
+                    straight = false;
+                    seed = sms_mnee_seeds[1u + k - line].xyz;
+                }
+            }
             tr = manifold_trial_start(rc.x0, rc.ng0, ml.y, ml.n, rc.es, rc.et, ml.directional, straight,
-                                      straight ? ml.y : manifold_sample_caster(u));
+                                      seed);
             trials += 1u;
             pending = true;
         }
