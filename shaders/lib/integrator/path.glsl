@@ -118,7 +118,8 @@ bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit
     // MIS-weighted against light sampling.
     vec3 Le = emitter_hit_radiance(st.d, found, sh);
     if (any(greaterThan(Le, vec3(0.0))) &&
-        !(found && manifold_coverage_covers(st.cov, sh.shape_flags))) {
+        !(found ? manifold_coverage_covers(st.cov, sh.shape_flags)
+                : manifold_coverage_covers_miss(st.cov))) {
         float w = 1.0;
         if (!st.prev_delta && ps.mis)
             w = mis_weight(st.prev_pdf,

@@ -91,4 +91,17 @@ bool manifold_coverage_covers(ManifoldCoverage c, uint emitter_flags) {
     return c.open && c.caster && (emitter_flags & SHAPE_CAUSTIC_EMITTER) != 0u;
 }
 
+// Whether a miss after c (the path reached the environment) closes a covered path: only where
+// the estimator produces chains that end in the environment (MANIFOLD_ENVIRONMENT_CHAINS, set
+// by the passes whose walks sample it); elsewhere the path tracer keeps these paths.
+bool manifold_coverage_covers_miss(ManifoldCoverage c) {
+#if defined(MANIFOLD_ENVIRONMENT_CHAINS) && !defined(LOOM_TEST_KEEP_ENVIRONMENT_PATHS)
+    // (LOOM_TEST_KEEP_ENVIRONMENT_PATHS: the double counting the SMS tests must detect.)
+    uint li = scene_info.counts.w;
+    return li != ~0u && manifold_coverage_covers(c, scene_lights[li].flags);
+#else
+    return false;
+#endif
+}
+
 #endif
