@@ -72,7 +72,9 @@ public:
         auto resolve = compileKernel(*this, ctx.shaders(), "passes/sms/sms_resolve.comp", defines);
         // Chains sized to maxChain: the walk state lives in registers or spills per lane, and
         // on lavapipe 2 vertices instead of 4 make the trials 2.6x faster (same image).
-        ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))}};
+        // Environment lights end chains too (the path part leaves those paths out as well).
+        ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))},
+                            {"MANIFOLD_ENVIRONMENT_CHAINS", "1"}};
         auto path = compileKernel(*this, ctx.shaders(), "passes/sms/sms_path.comp", chain);
         auto trials = compileKernel(*this, ctx.shaders(), "passes/sms/sms_trials.comp", chain);
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());

@@ -249,6 +249,29 @@ TEST(SpecularManifoldSampling, PoolUnderPointLightMatchesClosedForm) {
         "sms");
 }
 
+// An environment ends the chain at infinity in a sampled direction. Flat water under a constant
+// sky of radiance 1: every direction of the sky crosses the surface with (1 - F), and the
+// transmitted flux lands on the floor, E = 2 pi int_0^{pi/2} (1 - F(theta)) cos sin dtheta
+// (the floor points the camera sees lie well inside the surface's extent).
+TEST(SpecularManifoldSampling, PoolUnderConstantSkyMatchesClosedForm) {
+    const int n = 20000;
+    double E = 0;
+    for (int i = 0; i < n; ++i) {
+        double t = (i + 0.5) / n * M_PI / 2;
+        E += (1 - test::fresnelDielectric(std::cos(t), 1.33)) * std::cos(t) * std::sin(t);
+    }
+    E *= 2 * M_PI * (M_PI / 2) / n;
+    double expect = 0.5 / M_PI * E;
+    auto [stats, analytic] = test::poolCaustic(
+        {{"name", "sms"}, {"type", "SpecularManifoldSampling"}, {"params", {{"maxChain", 1}}}},
+        R"({"type": "constant", "radiance": 1, "caustic_emitter": true})",
+        [&](glm::dvec3) { return expect; }, 256);
+    double se = std::sqrt(stats.stderr2(0));
+    EXPECT_LT(std::abs(stats.mean(0) - analytic), 3 * se + 1e-3 * analytic)
+        << "sms " << stats.mean(0) << " +- " << se << " closed form " << analytic;
+    std::printf("pool, constant sky: %.6f +- %.6f vs %.6f\n", stats.mean(0), se, analytic);
+}
+
 // The generalized geometric term's end-point Jacobian |det(dx1/dy)| of two-refraction chains
 // through the glass sphere against central differences: move the light point along its plane,
 // re-solve from the old solution, measure x1's motion in its tangent plane.
@@ -654,6 +677,17 @@ TEST(SpecularManifoldSampling, UnbiasedAtReceiversSeenThroughWaterAgainstThePath
     scene.camera.toWorld = scene::lookAtMatrix({0, 2.2f, 1.6f}, {0, 0, -0.1f}, {0, 1, 0});
     expectUnbiased(scene, 128);
     expectAblationDetected(scene, "LOOM_TEST_SMS_PREFIX_UNWEIGHTED=1", 128);
+}
+
+// The same pool, full image against the path tracer (which finds the sky easily): the path part
+// must leave out exactly the chains that end in the sky; kept
+// (LOOM_TEST_KEEP_ENVIRONMENT_PATHS), they count twice.
+TEST(SpecularManifoldSampling, UnbiasedUnderAnEnvironmentAgainstThePathTracer) {
+    test::TempDir dir("loom-sms-sky");
+    auto scene = test::sceneFromJson(
+        test::poolScene(R"({"type": "constant", "radiance": 1, "caustic_emitter": true})"), dir);
+    expectUnbiased(scene, 64, 32);
+    expectAblationDetected(scene, "LOOM_TEST_KEEP_ENVIRONMENT_PATHS=1", 64);
 }
 
 // The bias class the exclusion prevents: with the covered paths left in the path part, the

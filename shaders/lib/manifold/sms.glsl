@@ -42,6 +42,12 @@ vec3 manifold_sample_caster(vec3 u) {
     return sample_triangle_point(u.xy, a, b, c);
 }
 
+// An environment light (map or constant): the chain ends at infinity in a sampled direction.
+bool manifold_light_is_environment(uint light) {
+    uint t = scene_lights[light].type;
+    return light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT);
+}
+
 // The light end of a chain: a point sampled by area on an emissive triangle (pdf per area,
 // selection included), or a point or spot light (pdf = selection probability).
 struct ManifoldLight {
@@ -93,6 +99,18 @@ ManifoldLight manifold_light_sample_at(uint li, vec2 u) {
         ml.directional = true;
         ml.valid = true;
     }
+#ifdef MANIFOLD_ENVIRONMENT_CHAINS
+    else if (manifold_light_is_environment(li)) {
+        // A sampled direction ends the chain at infinity as a directional light's does, with
+        // the environment's radiance over this solid-angle pdf in place of its irradiance.
+        float pdf = 1.0 / (4.0 * PI);
+        if (light_is(l.type, LIGHT_CONSTANT)) ml.y = sample_uniform_sphere(u);
+        else ml.y = envmap_sample(l.index, u, pdf);
+        ml.pdf = pdf;
+        ml.directional = true;
+        ml.valid = pdf > 0.0;
+    }
+#endif
     return ml;
 }
 
@@ -117,7 +135,8 @@ ManifoldLight manifold_light_from(vec3 y, float pdf, vec3 n, uint light) {
     ml.pdf = pdf;
     ml.n = n;
     ml.light = light;
-    ml.directional = scene_lights[light].type == LIGHT_DIRECTIONAL;
+    ml.directional =
+        scene_lights[light].type == LIGHT_DIRECTIONAL || manifold_light_is_environment(light);
     ml.point = dot(n, n) == 0.0 && !ml.directional;
     ml.s = vec3(0.0);
     ml.t = vec3(0.0);
@@ -402,6 +421,8 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
             vec3 w;
             float dist;
             E = point_light_incident(scene_lights[ml.light], last.p, w, dist) * dist * dist;
+        } else if (manifold_light_is_environment(ml.light)) {
+            E = environment_radiance(tr.y);  // over ml.pdf below: per solid angle
         } else {
             E = scene_lights[ml.light].p1.rgb;
         }
