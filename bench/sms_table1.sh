@@ -14,12 +14,13 @@
 #
 # Scenes: the project's glass sphere, curved mirror, wavy slab (both faces wavy), the slab with
 # a flat bottom (scenes/refractive_caustic.json) and the normal-mapped water surface, and, when
-# ../shared/scenes is present, sms-plane and sms-sphere (normal-mapped casters, as in the paper).
+# ../shared/scenes is present, sms-plane and sms-sphere (normal-mapped casters, as in the paper)
+# and sms-pool-lite (an environment map lights the pool through normal-mapped water).
 source "$(dirname "$0")/lib.sh"
 W=${WIDTH:-256} H=${HEIGHT:-256} FRAMES=${FRAMES:-4}
 uptime
 scenes="scenes/glass_sphere.json scenes/curved_mirror.json scenes/wavy_slab.json scenes/refractive_caustic.json scenes/normal_mapped_water.json"
-for s in ../shared/scenes/sms-plane/plane_sms_constfloor.xml ../shared/scenes/sms-sphere/sphere_sms_constfloor.xml; do
+for s in ../shared/scenes/sms-plane/plane_sms_constfloor.xml ../shared/scenes/sms-sphere/sphere_sms_constfloor.xml ../shared/scenes/sms-pool-lite/pool_sms.xml; do
     [ -e "$s" ] && scenes="$scenes $s"
 done
 mkdir -p out/sms_table1
