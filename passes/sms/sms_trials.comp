@@ -102,7 +102,8 @@ void main() {
                 }
             }
             if (status == SMS_DONE || bvh_iterations >= pc.stepBudget) break;
-            // The next trial: a fresh seed on the casters, or MNEE's straight line.
+            // The next trial: a fresh seed on the casters, or MNEE's (the straight line, or a
+            // reflector's centre).
             vec3 u = vec3(rng_next2(rng), rng_next(rng));
             bool straight = pc.estimator == ESTIMATOR_MNEE;
             vec3 seed = straight ? ml.y : manifold_sample_caster(u);
