@@ -99,6 +99,18 @@ vec3 microfacet_sample_beckmann_normals(float alpha, vec2 u) {
     return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }
 
+// Micro-normals with density D(m) cos(theta_m), independent of any direction (the offset
+// normals of rough manifold walks, which must stay fixed while the directions change):
+// Beckmann by Walter 2007 Eq. 28, GGX by Eq. 35 and 36 (tan^2 = alpha^2 u / (1 - u)).
+vec3 microfacet_sample_normals(uint dist, float alpha, vec2 u) {
+    if (dist != MICROFACET_GGX) return microfacet_sample_beckmann_normals(alpha, u);
+    float tan2 = alpha * alpha * u.x / max(1.0 - u.x, 1e-12);
+    float cos_t = inversesqrt(1.0 + tan2);
+    float sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));
+    float phi = 2.0 * PI * u.y;
+    return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
 // Micro-normal for wo (wo.z > 0) with the technique named in the header.
 vec3 microfacet_sample(uint dist, float alpha, vec3 wo, vec2 u) {
     if (dist == MICROFACET_GGX) return microfacet_sample_ggx_vndf(alpha, wo, u);

@@ -21,9 +21,9 @@
 #include <vector>
 
 #include "core/gpu/Context.h"
-#include "tests/support/Chi2.h"
 #include "core/scene/MaterialGpu.h"
 #include "core/shader/ShaderCompiler.h"
+#include "tests/support/Chi2.h"
 
 namespace {
 
@@ -710,6 +710,57 @@ TEST(Microfacet, NormalisationAndVisibleNormals) {
                 // GGX samples visible normals (integral 1); Beckmann samples D cos (also 1).
                 EXPECT_NEAR(pdf, 1.0, 2e-3);
             }
+        }
+    }
+}
+
+// Normals drawn by microfacet_sample_normals (rough manifold walks' offset normals) have density
+// D(m) cos(theta_m): weighted by 1 / (D cos), the indicator of a cone of directions averages to
+// the cone's solid angle 2 pi (1 - cos(half angle)) (D itself is checked above). One cone on the
+// axis, and one tilted off it, which also sees the azimuth's distribution. 1M independent
+// samples, within 4 standard errors (measured: 0.05-0.6 % of the solid angle).
+TEST(Microfacet, SampledNormalsHaveDensityDCos) {
+    Gpu& g = Gpu::get();
+    const auto& pipe = g.pipeline("microfacet_sample_normals.comp");
+    const uint32_t n = 1u << 20;
+    auto out = g.output(n, "results");
+    for (uint32_t dist : {0u, 1u}) {
+        for (float alpha : {0.05f, 0.2f, 0.6f}) {
+            SCOPED_TRACE(::testing::Message() << "dist " << dist << " alpha " << alpha);
+            gpu::Bindings b;
+            b.set("ResultBuffer", out);
+            gpu::PushConstants pc(pipe);
+            pc.set("count", n).set("dist", dist).set("alpha", alpha);
+            g.run(pipe, b, pc, n);
+            const auto r = g.download(*out, n);
+            // Half angles atan(1.5 alpha) about the axis and atan(alpha) about a direction
+            // tilted by atan(alpha) at azimuth 0.7.
+            const double t = std::atan(double(alpha)), c0 = std::cos(std::atan(1.5 * alpha));
+            const glm::dvec3 axis(std::sin(t) * std::cos(0.7), std::sin(t) * std::sin(0.7),
+                                  std::cos(t));
+            const double expect[2] = {2 * kPi * (1 - c0), 2 * kPi * (1 - std::cos(t))};
+            double sum[2] = {0, 0}, sum2[2] = {0, 0};
+            for (const glm::vec4& v : r) {
+                const glm::dvec3 m(v);
+                const double w = 1.0 / (double(v.w) * m.z);
+                const bool in[2] = {m.z > c0, glm::dot(m, axis) > std::cos(t)};
+                for (int k = 0; k < 2; ++k)
+                    if (in[k]) {
+                        sum[k] += w / expect[k];
+                        sum2[k] += (w / expect[k]) * (w / expect[k]);
+                    }
+            }
+            double ratio[2], se[2];
+            for (int k = 0; k < 2; ++k) {
+                ratio[k] = sum[k] / n;
+                se[k] = std::sqrt((sum2[k] / n - ratio[k] * ratio[k]) / n);
+                EXPECT_LT(std::abs(ratio[k] - 1.0), 4 * se[k])
+                    << (k ? "tilted cone" : "cone on the axis");
+            }
+            std::printf(
+                "dist %u alpha %.2f: cone on the axis %.5f +- %.5f, tilted %.5f +- %.5f of its "
+                "solid angle\n",
+                dist, alpha, ratio[0], se[0], ratio[1], se[1]);
         }
     }
 }
