@@ -25,18 +25,32 @@ for s in ../shared/scenes/sms-plane/plane_sms_constfloor.xml ../shared/scenes/sm
 done
 mkdir -p out/sms_table1
 printf "\n%-28s %9s %12s %12s %12s %10s %8s\n" scene success iter/sample trials/sol iter/sol "sms ms" capped
-for scene in $scenes; do
-    log=out/sms_table1/$(basename "$scene").log
-    if ! "$LOOM" render graphs/sms.json --scene "$scene" --width "$W" --height "$H" --frames "$FRAMES" \
-        --timings --output accum.output=out/sms_table1/$(basename "$scene").exr > "$log" 2>&1; then
-        printf "%-28s failed: %s\n" "$(basename "$scene")" "$(grep -m1 error "$log")"
-        continue
+# One Table 1 row: row NAME SCENE [loom render options...]
+row() {
+    local name=$1 scene=$2 tag=${1// /_}
+    shift 2
+    local log=out/sms_table1/$tag.log
+    if ! "$LOOM" render graphs/sms.json --scene "$scene" "$@" --width "$W" --height "$H" \
+        --frames "$FRAMES" --timings --output accum.output=out/sms_table1/$tag.exr > "$log" 2>&1; then
+        printf "%-28s failed: %s\n" "$name" "$(grep -m1 error "$log")"
+        return
     fi
     get() { grep "^sms\.$1 = " "$log" | awk '{print $3}'; }
-    ms=$(awk '$1 == "sms" {print $2}' "$log" | head -1)
-    printf "%-28s %9.3f %12.1f %12.2f %12.1f %10s %8s\n" "$(basename "$scene")" "$(get successRate)" \
+    local ms=$(awk '$1 == "sms" {print $2}' "$log" | head -1)
+    printf "%-28s %9.3f %12.1f %12.2f %12.1f %10s %8s\n" "$name" "$(get successRate)" \
         "$(get iterationsPerSample)" "$(get trialsPerSolution)" "$(get iterationsPerSolution)" "$ms" "$(get capped)"
+}
+for scene in $scenes; do
+    row "$(basename "$scene")" "$scene"
 done
+# Rough casters (Zeltner et al. 2020 Sec. 5.3): the shared rough gold plane at two roughnesses
+# (ROUGH_ALPHAS), offset normals sampled per estimate.
+rough=../shared/scenes/sms-plane/plane_rough_sms_constfloor.xml
+if [ -e "$rough" ]; then
+    for alpha in ${ROUGH_ALPHAS:-0.02 0.1}; do
+        row "plane_rough alpha=$alpha" "$rough" --define alpha="$alpha"
+    done
+fi
 echo "(Hong et al. 2025 Table 1, SMS column: plane 1182 iterations per solution, slab 67)"
 if [ "${EQUAL_TIME:-0}" = 1 ]; then
     "$LOOM" run scripts/sms_equal_time.lua configs=bench/data/sms_configs.json \

@@ -63,6 +63,10 @@ public:
         r.param("biasedTrials", 4).range(1, kMaxBiasedTrials).doc("biased: trials M per estimate");
         reflectCausticPath(r, 64);
         reflectReceiverDepth(r);
+        r.param("roughCasters", true)
+            .doc(
+                "walk rough conductors and dielectrics about sampled offset normals (Zeltner et "
+                "al. Sec. 5.3); false leaves their caustics to the path tracer");
     }
     void execute(ExecuteContext& ctx) override {
         const auto& scene = ctx.scene();
@@ -75,6 +79,9 @@ public:
         // Environment lights end chains too (the path part leaves those paths out as well).
         ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))},
                             {"MANIFOLD_ENVIRONMENT_CHAINS", "1"}};
+        // Rough casters' offset normals, compiled in only where the scene has such casters
+        // (llvmpipe runs untaken branches masked).
+        if (mRoughCasters && param<bool>("roughCasters")) chain["MANIFOLD_ROUGH_CASTERS"] = "1";
         auto path = compileKernel(*this, ctx.shaders(), "passes/sms/sms_path.comp", chain);
         auto trials = compileKernel(*this, ctx.shaders(), "passes/sms/sms_trials.comp", chain);
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());
@@ -156,6 +163,7 @@ private:
         double total = 0.0;
         uint32_t first = 0;
         bool receivers = false, emitters = false, refractors = false;
+        mRoughCasters = false;
         // MNEE's seeds (SmsMneeSeeds): [0].x = 1 when a refractive caster exists (the straight
         // line to the light), then the bounding-box centre of each reflective caster.
         std::vector<glm::vec4> mneeSeeds(1, glm::vec4(0.0f));
@@ -173,7 +181,12 @@ private:
                     hi = glm::max(hi, w);
                 }
                 scene::BsdfType type = s.materials[shape.material].type;
-                if (type == scene::BsdfType::Conductor && !mesh.positions.empty())
+                bool rough = type == scene::BsdfType::RoughConductor ||
+                             type == scene::BsdfType::RoughDielectric;
+                if (rough) mRoughCasters = true;
+                if ((type == scene::BsdfType::Conductor ||
+                     type == scene::BsdfType::RoughConductor) &&
+                    !mesh.positions.empty())
                     mneeSeeds.push_back(glm::vec4(0.5f * (lo + hi), 0.0f));
                 else
                     refractors = true;
@@ -222,6 +235,7 @@ private:
     gpu::CounterBuffer<8> mCounters{"SmsCounters"};
     double mTotals[8] = {};
     bool mWarnedLoopLimit = false, mWarnedCap = false;
+    bool mRoughCasters = false;  // the scene has rough conductor or dielectric casters
 };
 
 LOOM_REGISTER_PASS(SpecularManifoldSamplingPass, "SpecularManifoldSampling",

@@ -119,6 +119,11 @@ void main() {
             }
             tr = manifold_trial_start(rc.x0, rc.ng0, ml.y, ml.n, rc.es, rc.et, ml.directional, straight,
                                       seed);
+#ifdef MANIFOLD_ROUGH_CASTERS
+            // One set of offset normals per estimate (its own stream: xyz of the SMS stream,
+            // which the trials leave unchanged, with z mixed).
+            tr.offset_stream = uvec4(st.rng.xy, st.rng.z ^ 0x0FF5E7A1u, 0u);
+#endif
             trials += 1u;
             pending = true;
         }

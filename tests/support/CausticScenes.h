@@ -81,13 +81,14 @@ inline double poolPointCaustic(glm::dvec3 x, glm::dvec3 light) {
     return 0.5 / M_PI * E;
 }
 
-// The caustic means of `pass` (named "sms" or any name; its port `caustic`) over the image against
-// the closed form at the GBuffer's pixel centres.
-inline std::pair<RegionStats, double> poolCaustic(
-    const json& pass, const std::string& light, const std::function<double(glm::dvec3)>& closedForm,
-    int frames) {
-    TempDir dir("loom-sms-pool");
-    auto scene = sceneFromJson(poolScene(light), dir);
+// The caustic means of `pass` (named "sms" or any name; its port `caustic`) over the image of
+// the scene `sceneText` (16 x 16) against the closed form at the GBuffer's pixel centres on the
+// floor (y = 0).
+inline std::pair<RegionStats, double> floorCaustic(
+    const json& pass, const std::string& sceneText,
+    const std::function<double(glm::dvec3)>& closedForm, int frames) {
+    TempDir dir("loom-sms-floor");
+    auto scene = sceneFromJson(sceneText, dir);
     json g = {{"passes",
                {pass, {{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
               {"edges", json::array()},
@@ -112,6 +113,13 @@ inline std::pair<RegionStats, double> poolCaustic(
         stats.add(r.readOutput(pass["name"].get<std::string>() + ".caustic"));
     }
     return {stats, analytic};
+}
+
+// The same on the flat pool under `light`.
+inline std::pair<RegionStats, double> poolCaustic(
+    const json& pass, const std::string& light, const std::function<double(glm::dvec3)>& closedForm,
+    int frames) {
+    return floorCaustic(pass, poolScene(light), closedForm, frames);
 }
 
 // The caustic of `pass` on the flat pool against the closed forms, within 3 standard errors

@@ -4,7 +4,9 @@
 // against (Richardson-extrapolated) central differences of the constraints, moving one vertex in its triangle (normal
 // re-interpolated) or one end point at a time. Input rows, per column: 0 (x0, constraint),
 // 1 (y, end at infinity), 2 (vertex 0 point, triangle), 3 (vertex 1 point, triangle),
-// 4 (es, k), 5 (et, from_light), 6 (h, 0, 0, 0). Output row 6 i + j: (analytic, difference) of
+// 4 (es, k), 5 (et, from_light), 6 (h, u offset). With MANIFOLD_ROUGH_CASTERS, rough vertices
+// scatter about the offset normal of u (vertex i: u shifted by 0.37 i; manifold_rough_offset),
+// held in their frame as the vertex moves. Output row 6 i + j: (analytic, difference) of
 // column j of row i, j = 0..5 (previous, this, next vertex; each along its two parameters);
 // vec4(-1e30) where the differences of a normal-mapped vertex leave its bilinear texel cell
 // (the map's derivative jumps there).
@@ -17,6 +19,7 @@ layout(rgba32f) uniform writeonly image2D outputImage;
 layout(push_constant) uniform Params { uvec2 frameSize; } pc;
 
 vec4 row(int x, int y) { return imageLoad(inputImage, ivec2(x, y)); }
+vec2 offset_u;
 
 // The vertex of triangle prim at point p (in its plane): barycentrics from the Gram system of
 // the edges, which are surface_point's dp_du, dp_dv.
@@ -26,7 +29,11 @@ ManifoldVertex vertex_at(uint prim, vec3 p) {
     float g11 = dot(sp.dp_du, sp.dp_du), g12 = dot(sp.dp_du, sp.dp_dv), g22 = dot(sp.dp_dv, sp.dp_dv);
     vec2 r = vec2(dot(sp.dp_du, d), dot(sp.dp_dv, d));
     vec2 b = vec2(g22 * r.x - g12 * r.y, g11 * r.y - g12 * r.x) / (g11 * g22 - g12 * g12);
-    return manifold_vertex(prim, b);
+    ManifoldVertex v = manifold_vertex(prim, b);
+#ifdef MANIFOLD_ROUGH_CASTERS
+    manifold_rough_offset(v, offset_u);
+#endif
+    return v;
 }
 
 // The normal map's bilinear cell at vertex v (ivec2(-1) without a map).
@@ -55,6 +62,7 @@ void main() {
     c.end_at_infinity = row(x, 1).w != 0.0;
     for (uint i = 0u; i < c.k; ++i) {
         vec4 v = row(x, 2 + int(i));
+        offset_u = fract(row(x, 6).yz + 0.37 * float(i));
         c.v[i] = vertex_at(uint(v.w), v.xyz);
     }
     manifold_choose_frames(c, y);
@@ -82,6 +90,7 @@ void main() {
                         if (from_light) dy = e * ((j & 1u) != 0u ? et : es);
                     } else {
                         ManifoldVertex v = c.v[m];
+                        offset_u = fract(row(x, 6).yz + 0.37 * float(m));
                         d.v[m] = vertex_at(v.prim, v.p + e * ((j & 1u) != 0u ? v.t : v.s));
                         one_cell = one_cell && all(equal(normal_map_cell(d.v[m]), normal_map_cell(v)));
                     }

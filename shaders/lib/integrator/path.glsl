@@ -153,6 +153,12 @@ bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit
     vec3 u_light = vec3(rng_next2(rng), rng_next(rng));
     if (has_smooth && ps.nee) {
         NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic);
+#ifdef MANIFOLD_ROUGH_CASTERS
+        if (nee.valid && manifold_coverage_covers_light_sample(
+                             st.cov, sh, st.depth, ps.covered_depth, ps.covered_max_chain, wo,
+                             shading_to_local(sh, nee.ls.wi), nee.ls.light))
+            nee.valid = false;
+#endif
         if (nee.valid) {
             shadow.ray = nee.ray;
             shadow.c = st.beta * nee.value;

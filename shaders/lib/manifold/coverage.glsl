@@ -15,6 +15,7 @@
 #define LOOM_MANIFOLD_COVERAGE_GLSL
 
 #include "lib/bsdf.glsl"
+#include "lib/lights.glsl"
 #include "lib/manifold/walk.glsl"
 #include "lib/shading.glsl"
 
@@ -30,11 +31,18 @@ bool manifold_chain_surface(uint shape_flags, Material m) {
            manifold_material_specular(m);
 }
 
-// Whether a sampled delta lobe is the one the walk takes there (refraction through
-// dielectrics, reflection off conductors).
+// Whether a sampled lobe is the one the walk takes there (refraction through dielectrics,
+// reflection off conductors): delta, or glossy at a rough vertex the walk samples an offset
+// normal for (MANIFOLD_ROUGH_CASTERS).
 bool manifold_chain_lobe(Material m, uint bsdf_sample_flags) {
-    uint want = material_type(m) == MATERIAL_CONDUCTOR ? BSDF_REFLECTION : BSDF_TRANSMISSION;
-    return (bsdf_sample_flags & want) != 0u && (bsdf_sample_flags & BSDF_DELTA) != 0u;
+    uint t = material_type(m);
+    bool conductor = t == MATERIAL_CONDUCTOR || t == MATERIAL_ROUGH_CONDUCTOR;
+    uint want = conductor ? BSDF_REFLECTION : BSDF_TRANSMISSION;
+    uint lobe = BSDF_DELTA;
+#ifdef MANIFOLD_ROUGH_CASTERS
+    if (manifold_material_rough(m)) lobe = BSDF_GLOSSY;
+#endif
+    return (bsdf_sample_flags & want) != 0u && (bsdf_sample_flags & lobe) != 0u;
 }
 
 // A light SMS samples (its entry's flags carry the shape's or the light's tags).
@@ -99,6 +107,28 @@ bool manifold_coverage_covers_miss(ManifoldCoverage c) {
     // (LOOM_TEST_KEEP_ENVIRONMENT_PATHS: the double counting the SMS tests must detect.)
     uint li = scene_info.counts.w;
     return li != ~0u && manifold_coverage_covers(c, scene_lights[li].flags);
+#else
+    return false;
+#endif
+}
+
+// Whether a light sample taken at sh (path depth `depth`, after c) towards light `light`
+// closes a covered path: at a rough chain vertex the path tracer's light sample reaches the
+// emitter as its BSDF sample does, so both leave the covered paths out (wo, wi: local
+// directions of the vertex). Smooth chains have no light samples on their vertices.
+bool manifold_coverage_covers_light_sample(ManifoldCoverage c, ShadingPoint sh, uint depth,
+                                           uint receiver_depth, uint max_chain, vec3 wo,
+                                           vec3 wi, uint light) {
+#if defined(MANIFOLD_ROUGH_CASTERS) && !defined(LOOM_TEST_ROUGH_LIGHT_SAMPLES_KEPT)
+    // (LOOM_TEST_ROUGH_LIGHT_SAMPLES_KEPT: the double counting the SMS tests must detect.)
+    if (!c.open) return false;
+    uint lobe = BSDF_GLOSSY | (wo.z * wi.z > 0.0 ? BSDF_REFLECTION : BSDF_TRANSMISSION);
+    ManifoldCoverage next = manifold_coverage_step(c, sh, depth, receiver_depth, max_chain, lobe);
+#ifndef MANIFOLD_ENVIRONMENT_CHAINS
+    uint t = scene_lights[light].type;
+    if (light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT)) return false;
+#endif
+    return manifold_coverage_covers(next, scene_lights[light].flags);
 #else
     return false;
 #endif

@@ -14,6 +14,7 @@
 #include "lib/manifold/coverage.glsl"
 #include "lib/manifold/seed_space.glsl"
 #include "lib/manifold/walk.glsl"
+#include "lib/rng.glsl"
 #include "lib/sampling.glsl"
 #include "lib/shading.glsl"
 
@@ -191,6 +192,11 @@ struct ManifoldTrial {
     vec2 step;               // the current Newton step of the first vertex
     float endpoint_det;      // end-point Jacobian determinant of the chain (walk.glsl)
     vec3 es, et;             // the plane the end point moves in: the area light's, or x0's
+#ifdef MANIFOLD_ROUGH_CASTERS
+    // The stream of the rough vertices' offset normals (manifold_rough_offset): vertex i of
+    // every chain of an estimate takes the same two numbers, so trials reuse the offsets.
+    uvec4 offset_stream;
+#endif
 #ifdef MANIFOLD_TRUST_REGION
     // Sample-space partitioning (Hong et al. 2025 Sec. 4.1): the chain's first caster vertex
     // is on first_shape, and its first vertex's seed-space coordinates stay in the tiles
@@ -252,6 +258,9 @@ ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, 
     tr.proposal.k = 0u;
     tr.chain.end_at_infinity = directional;
     tr.proposal.end_at_infinity = directional;
+#ifdef MANIFOLD_ROUGH_CASTERS
+    tr.offset_stream = uvec4(0u);
+#endif
     manifold_trial_ray_towards(tr, x0, ng0, straight ? (directional ? x0 + y : y) : seed);
     if (straight && !directional) tr.ray_tmax = length(y - x0) * (1.0 - 1e-4);
     return tr;
@@ -364,6 +373,10 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
     }
     if (append) {
         tr.proposal.v[i] = manifold_vertex(hit.prim, hit.bary);
+#ifdef MANIFOLD_ROUGH_CASTERS
+        Rng offset_rng = rng_from_seed(uvec4(tr.offset_stream.xyz, i));
+        manifold_rough_offset(tr.proposal.v[i], rng_next2(offset_rng));
+#endif
         tr.proposal.k = i + 1u;
         if (!seeding && tr.proposal.k == tr.chain.k) {
             for (uint j = 0u; j < tr.chain.k; ++j) tr.chain.v[j] = tr.proposal.v[j];
@@ -410,6 +423,9 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
     if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
     float radiance_scale;
     vec3 T = manifold_chain_throughput(c, tr.x0, radiance_scale);
+#ifdef MANIFOLD_ROUGH_CASTERS
+    T *= manifold_chain_rough_weight(c, tr.x0, tr.y);
+#endif
     ManifoldVertex last = c.v[c.k - 1u];
     vec3 L;
     float G;
@@ -426,7 +442,8 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
         } else {
             E = scene_lights[ml.light].p1.rgb;
         }
-        L = E / (max(abs(wi_local.z), 1e-8) * radiance_scale);
+        L = E * manifold_chain_flux_to_radiance(c, tr.x0, tr.y) /
+            (max(abs(wi_local.z), 1e-8) * radiance_scale);
         G = manifold_geometric_term(c, tr.x0, tr.y, false, tr.endpoint_det);
     } else {
         L = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n,

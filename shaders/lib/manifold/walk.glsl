@@ -14,6 +14,7 @@
 #include "lib/fresnel.glsl"
 #include "lib/manifold/constraints.glsl"
 #include "lib/material.glsl"
+#include "lib/microfacet.glsl"
 #include "lib/scene.glsl"
 #include "lib/shading.glsl"
 
@@ -34,12 +35,25 @@ struct ManifoldVertex {
     uint prim;
     uint shape;         // its material gives the throughput (manifold_chain_throughput)
     bool reflection;    // conductor: mirror reflection; dielectric: refraction
+#ifdef MANIFOLD_ROUGH_CASTERS
+    vec3 n_macro;       // a rough vertex's shading normal; n is then its offset normal
+#endif
 };
 
+bool manifold_material_rough(Material m) {
+    uint t = material_type(m);
+    return t == MATERIAL_ROUGH_CONDUCTOR || t == MATERIAL_ROUGH_DIELECTRIC;
+}
+
 // Whether a shape's material scatters as a manifold walk models it: smooth conductors reflect,
-// smooth dielectrics refract (the walk's chains never reflect off glass).
+// smooth dielectrics refract (the walk's chains never reflect off glass). With
+// MANIFOLD_ROUGH_CASTERS (set by the passes that sample offset normals) rough conductors and
+// dielectrics too, about a sampled microfacet normal (manifold_rough_offset).
 bool manifold_material_specular(Material m) {
     uint t = material_type(m);
+#ifdef MANIFOLD_ROUGH_CASTERS
+    if (manifold_material_rough(m)) return true;
+#endif
     return t == MATERIAL_CONDUCTOR || t == MATERIAL_DIELECTRIC;
 }
 
@@ -107,7 +121,7 @@ ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     v.dn_ds = sp.dn_du * uv_s.x + sp.dn_dv * uv_s.y;
     v.dn_dt = sp.dn_du * uv_t.x + sp.dn_dv * uv_t.y;
     v.tangent = sp.dp_du;
-    v.reflection = material_type(m) == MATERIAL_CONDUCTOR;
+    v.reflection = material_type(m) == MATERIAL_CONDUCTOR || material_type(m) == MATERIAL_ROUGH_CONDUCTOR;
     v.eta = material_eta(m);
     uint nmap = material_normal_map(m);
     if (nmap != MATERIAL_NO_TEXTURE) manifold_normal_map(v, sp, nmap, uv_s, uv_t);
@@ -132,6 +146,31 @@ void manifold_half_vector_frame(ManifoldVertex v, vec3 n, vec3 dn, out vec3 sh, 
     dsh = manifold_d_normalize(sh, len, da);
     dth = cross(dn, sh) + cross(n, dsh);
 }
+
+#ifdef MANIFOLD_ROUGH_CASTERS
+// A rough vertex (Zeltner et al. 2020 Sec. 5.3) scatters about an offset normal
+// n' = o.x s_h + o.y t_h + o.z n: o is a microfacet normal of its material's distribution,
+// drawn with density D(o) o.z from u in the vertex's half-vector frame and held fixed there
+// while the walk moves the vertex, so that n' and its derivatives follow the frame (the
+// generalized geometric term sees them). u stays the same for a whole estimate, its trials
+// included. Smooth vertices keep n (n_macro = n).
+void manifold_rough_offset(inout ManifoldVertex v, vec2 u) {
+    v.n_macro = v.n;
+    Material m = scene_materials[scene_shapes[v.shape].material];
+    if (!manifold_material_rough(m)) return;
+    float alpha = max(material_alpha(m), MICROFACET_MIN_ALPHA);
+    vec3 o = microfacet_sample_normals(material_distribution(m), alpha, u);
+    vec3 sh, th, dsh, dth, dn[2];
+    for (int i = 0; i < 2; ++i) {
+        vec3 dn_i = i == 0 ? v.dn_ds : v.dn_dt;
+        manifold_half_vector_frame(v, v.n, dn_i, sh, th, dsh, dth);
+        dn[i] = o.x * dsh + o.y * dth + o.z * dn_i;
+    }
+    v.n = o.x * sh + o.y * th + o.z * v.n;
+    v.dn_ds = dn[0];
+    v.dn_dt = dn[1];
+}
+#endif
 
 // Constraint of vertex v between x_prev and x_next (kind: a MANIFOLD_CONSTRAINT_* index).
 vec2 manifold_constraint(uint kind, vec3 x_prev, ManifoldVertex v, vec3 x_next, mat3 frame,
@@ -375,5 +414,64 @@ vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, out float radiance_scal
     }
     return T;
 }
+
+// Flux from a point or directional light (irradiance I d omega_y / dA_x0, or E times the
+// beam's area ratio) against the radiance the path tracer carries: a vertex that scatters about
+// a normal m other than its geometric normal n_g (an interpolated or mapped shading normal, a
+// rough vertex's offset normal) changes the beam's etendue by |l.n_g| |c.m| / (|c.n_g| |l.m|)
+// (c towards the camera side, l towards the light; reflection keeps solid angle about m,
+// refraction scales it by eta^2 |c.m| / |l.m|), while the path tracer's specular lobes keep
+// radiance (times F, or (1 - F) / eta^2). The product of the inverse factors turns the flux form
+// into the radiance form; 1 where every vertex scatters about its geometric normal.
+float manifold_chain_flux_to_radiance(ManifoldChain c, vec3 x0, vec3 y) {
+    float r = 1.0;
+    for (uint i = 0u; i < c.k; ++i) {
+        ManifoldVertex v = c.v[i];
+        vec3 wc = normalize(manifold_chain_prev(c, i, x0) - v.p);
+        vec3 wl = normalize(manifold_chain_next(c, i, y) - v.p);
+        r *= abs(dot(wc, v.ng)) * abs(dot(wl, v.n)) / (abs(dot(wl, v.ng)) * abs(dot(wc, v.n)));
+    }
+#ifdef LOOM_TEST_FLUX_FORM_KEPT  // the ablation the SMS tests must detect
+    r = 1.0;
+#endif
+    return r;
+}
+
+#ifdef MANIFOLD_ROUGH_CASTERS
+// What a chain's rough vertices weigh#ifdef MANIFOLD_ROUGH_CASTERS
+// What a chain's rough vertices weigh beyond their specular scattering about the offset normal
+// m (manifold_rough_offset: density D(m) (m.n)). With c towards the camera side and l towards
+// the light, f |l.n| d omega_l = F D(m) G2(c, l, m) |c.m| / |c.n| dm at a rough vertex
+// (Walter et al. 2007 Eq. 14 and 17 turn d omega_l into dm; transmitted radiance scales by
+// 1/eta^2 as through smooth glass). For fixed m the chain is specular, and the throughput
+// (Fresnel at c.m) and the generalized geometric term take it from there: what remains is
+// G2 |c.m| / (|c.n| |m.n|), D cancelling against the density.
+float manifold_chain_rough_weight(ManifoldChain c, vec3 x0, vec3 y) {
+    float w = 1.0;
+    for (uint i = 0u; i < c.k; ++i) {
+        ManifoldVertex v = c.v[i];
+        Material m = scene_materials[scene_shapes[v.shape].material];
+        if (!manifold_material_rough(m)) continue;
+        vec3 wc = normalize(manifold_chain_prev(c, i, x0) - v.p);
+        vec3 wl = normalize(manifold_chain_next(c, i, y) - v.p);
+        float c_n = dot(wc, v.n_macro);
+        if (v.reflection && c_n <= 0.0 && !material_two_sided(m)) return 0.0;
+        // The frame of the side c is on; m faces it too (microfacet.glsl's convention).
+        vec3 n = c_n >= 0.0 ? v.n_macro : -v.n_macro;
+        vec3 mn = dot(v.n, n) >= 0.0 ? v.n : -v.n;
+        vec3 a, b;
+        orthonormal_basis(n, a, b);
+        mat3 to_local = transpose(mat3(a, b, n));
+        vec3 cl = to_local * wc, ll = to_local * wl, ml = to_local * mn;
+        float g2 = microfacet_g2(material_distribution(m), max(material_alpha(m), MICROFACET_MIN_ALPHA),
+                                 cl, ll, ml);
+#ifdef LOOM_TEST_ROUGH_WEIGHT_OMITTED  // the ablation the SMS tests must detect
+        continue;
+#endif
+        w *= g2 * abs(dot(cl, ml)) / (abs(cl.z) * ml.z);
+    }
+    return w;
+}
+#endif
 
 #endif
