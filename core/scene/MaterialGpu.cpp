@@ -52,6 +52,7 @@ MaterialGpu packMaterial(const Material& material) {
     if (material.twoSided) flags |= kMaterialTwoSided;
     if (material.distribution == Microfacet::Beckmann) flags |= kMaterialBeckmann;
     if (material.nonlinear) flags |= kMaterialNonlinear;
+    if (material.normalMap >= 0 && material.normalMapUseSlopes) flags |= kMaterialNormalSlopes;
     const auto texture = [](int index) {
         return index < 0 ? kMaterialNoTexture : static_cast<uint32_t>(index);
     };
@@ -60,6 +61,14 @@ MaterialGpu packMaterial(const Material& material) {
                             texture(material.specularReflectanceTexture),
                             texture(material.normalMap), kMaterialNoTexture);
     return g;
+}
+
+glm::vec4 normalMapSlopeTexel(glm::vec4 rgba) {
+    glm::vec3 n = 2.0f * glm::vec3(rgba) - 1.0f;
+    float len = glm::length(n);
+    n = len > 0.0f ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
+    float z = std::max(n.z, 1e-3f);
+    return glm::vec4(n.x / z, n.y / z, 1.0f, rgba.a);
 }
 
 }  // namespace loom::scene

@@ -16,6 +16,9 @@ enum MaterialGpuFlags : uint32_t {
     kMaterialTwoSided = 1u << 0,
     kMaterialBeckmann = 1u << 1,   // else GGX
     kMaterialNonlinear = 1u << 2,  // (rough)plastic 'nonlinear'
+    // The normal map's texels hold slopes (normalMapSlopeTexel): bilinear lookups interpolate
+    // slopes (the SMS normalmap's use_slopes), and the tangent-space normal is the texel itself.
+    kMaterialNormalSlopes = 1u << 3,
 };
 
 inline constexpr uint32_t kMaterialNoTexture = 0xffffffffu;
@@ -45,8 +48,15 @@ static_assert(uint32_t(BsdfType::Diffuse) == 0 && uint32_t(BsdfType::RoughDielec
               "BsdfType order must match MATERIAL_* in shaders/lib/material.glsl");
 
 // Packs a material for the GPU. Clamps alpha to the shader's minimum (1e-4) and precomputes
-// the plastic coat's internal diffuse Fresnel reflectance Fdr(1 / eta).
+// the plastic coat's internal diffuse Fresnel reflectance Fdr(1 / eta). A normal map with
+// use_slopes sets kMaterialNormalSlopes; the caller points textures.z at the map's slope copy.
 MaterialGpu packMaterial(const Material& material);
+
+// A normal map texel (rgb = (n + 1) / 2) as the slope form the SMS normalmap interpolates
+// (Zeltner et al. 2020, after LEAN mapping): n normalised, then (n.x / n.z, n.y / n.z, 1), whose
+// bilinear interpolation, normalised, is the tangent-space normal. n.z is kept above 1e-3 (a
+// texel at or below the horizon has no finite slope).
+glm::vec4 normalMapSlopeTexel(glm::vec4 rgba);
 
 // Exact unpolarised dielectric Fresnel reflectance (same convention as fresnel_dielectric in
 // shaders/lib/fresnel.glsl: eta = eta_int / eta_ext, negative cosine = arriving from inside).

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <map>
 
 #include "core/scene/Bvh.h"
 #include "core/scene/Camera.h"
@@ -275,6 +276,27 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
                 throw UserError("texture '" + t.name + "' has no texel data");
         }
         textures.push_back(tg);
+    }
+    // Normal maps read as slopes (kMaterialNormalSlopes): a slope copy of each such map, shared
+    // by the materials that use it that way (another material may read the same map as normals).
+    std::map<uint32_t, uint32_t> slopeCopies;
+    for (auto& mg : materials) {
+        uint32_t src = mg.textures.z;
+        if (!(mg.info.y & kMaterialNormalSlopes) || src >= textures.size()) continue;
+        auto [it, fresh] = slopeCopies.try_emplace(src, uint32_t(textures.size()));
+        if (fresh) {
+            TextureGpu tg = textures[src];
+            tg.color0 = normalMapSlopeTexel(tg.color0);
+            tg.color1 = normalMapSlopeTexel(tg.color1);
+            if (tg.kind == uint32_t(TextureKind::Bitmap)) {
+                uint32_t from = tg.offset;
+                tg.offset = uint32_t(texels.size());
+                for (uint32_t i = 0; i < tg.width * tg.height; ++i)
+                    texels.push_back(normalMapSlopeTexel(texels[from + i]));
+            }
+            textures.push_back(tg);
+        }
+        mg.textures.z = it->second;
     }
 
     // Light list: emissive triangles (power = pi * L * area, one-sided), then analytic lights.

@@ -19,6 +19,7 @@ const uint MATERIAL_NULL = 7u;
 const uint MATERIAL_FLAG_TWO_SIDED = 1u;
 const uint MATERIAL_FLAG_BECKMANN = 2u;   // else GGX
 const uint MATERIAL_FLAG_NONLINEAR = 4u;  // (rough)plastic 'nonlinear' (Mitsuba)
+const uint MATERIAL_FLAG_NORMAL_SLOPES = 8u;  // the normal map's texels hold slopes (use_slopes)
 
 const uint MATERIAL_NO_TEXTURE = 0xffffffffu;
 
@@ -50,6 +51,7 @@ uint material_type(Material m) {
 bool material_is(uint type, uint t) { return material_type_present(t) && type == t; }
 bool material_two_sided(Material m) { return (m.info.y & MATERIAL_FLAG_TWO_SIDED) != 0u; }
 bool material_nonlinear(Material m) { return (m.info.y & MATERIAL_FLAG_NONLINEAR) != 0u; }
+bool material_normal_slopes(Material m) { return (m.info.y & MATERIAL_FLAG_NORMAL_SLOPES) != 0u; }
 // MICROFACET_GGX (0) or MICROFACET_BECKMANN (1), see microfacet.glsl.
 uint material_distribution(Material m) {
     return (m.info.y & MATERIAL_FLAG_BECKMANN) != 0u ? 1u : 0u;

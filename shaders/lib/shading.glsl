@@ -53,11 +53,16 @@ void shading_tangent_frame(vec3 n, vec3 tangent, out vec3 t, out vec3 b) {
     }
 }
 
-// Tangent-space normal map (Mitsuba normalmap): the texel rgb holds the normal as 2 rgb - 1 in
-// the frame (t, b, n) of the interpolated normal n. Manifold walks differentiate the same
-// expression (manifold/walk.glsl manifold_vertex).
-vec3 normal_map_normal(vec3 rgb, vec3 n, vec3 t, vec3 b) {
-    vec3 nt = 2.0 * rgb - 1.0;
+// Tangent-space normal map (Mitsuba normalmap): the bilinear texel value holds the normal in
+// the frame (t, b, n) of the interpolated normal n, as 2 rgb - 1, or, for maps read as slopes
+// (the SMS normalmap's use_slopes; MaterialGpu.h normalMapSlopeTexel), as (n.x / n.z, n.y / n.z,
+// 1) itself, so that slopes are what the lookup interpolates. Manifold walks differentiate the
+// same expressions (manifold/walk.glsl manifold_normal_map).
+vec3 normal_map_tangent_normal(Material m, vec3 texel) {
+    return material_normal_slopes(m) ? texel : 2.0 * texel - 1.0;
+}
+
+vec3 normal_map_normal(vec3 nt, vec3 n, vec3 t, vec3 b) {
     return normalize(nt.x * t + nt.y * b + nt.z * n);
 }
 
@@ -76,7 +81,8 @@ ShadingPoint shading_point(Hit hit) {
     shading_tangent_frame(s.n, s.sp.tangent, s.t, s.b);
     uint nmap = material_normal_map(s.mat);
     if (nmap != MATERIAL_NO_TEXTURE) {
-        vec3 n = normal_map_normal(texture_fetch(nmap, s.sp.uv).rgb, s.n, s.t, s.b);
+        vec3 nt = normal_map_tangent_normal(s.mat, texture_fetch(nmap, s.sp.uv).rgb);
+        vec3 n = normal_map_normal(nt, s.n, s.t, s.b);
         if (!any(isnan(n)) && !any(isinf(n))) {
             s.n = n;
             vec3 t2 = s.t - s.n * dot(s.n, s.t);

@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/glm.hpp>
+#include <random>
 
 #include "core/graph/Renderer.h"
 #include "core/scene/Camera.h"
 #include "core/scene/Shapes.h"
 #include "tests/support/GpuSupport.h"
+#include "tests/support/KernelColumns.h"
 
 using namespace loom;
 using namespace loom::scene;
@@ -146,4 +148,89 @@ TEST(SurfacePoint, PartialsMatchCentralDifferences) {
         worstP, worstN, worstTrunc, worstRatio, worstExact, detected, 2 * kPoints);
     EXPECT_EQ(bad, 0);
     EXPECT_GT(detected, int(0.9 * 2 * kPoints)) << "tolerance too loose to catch the bug class";
+}
+
+// Normal maps (shaders/lib/shading.glsl), read as normals (2 rgb - 1, bilinear) or as slopes
+// (use_slopes, the SMS normalmap: each texel's normalised normal as (x / z, y / z, 1), bilinear),
+// against the same lookup written here in double from the texels: wrap-around bilinear cells
+// with texel centres at (i + 0.5) / size, the tangent frame of the interpolated normal. A 4 x 4
+// map of normals tilted up to 60 degrees, 512 random points on a rectangle, both modes; each
+// mode must also differ from the other (so that the comparison can tell them apart).
+TEST(ShadingPoint, NormalMapsMatchTheirTexelsAsNormalsOrSlopes) {
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    Texture map;
+    map.name = "tilted";
+    map.width = map.height = 4;
+    map.isNormalMap = true;
+    map.uvScale = glm::vec2(1.5f, 1.0f);
+    for (int i = 0; i < 16; ++i) {
+        double tilt = 1.05 * u01(rng), phi = 2 * M_PI * u01(rng);
+        glm::dvec3 n(std::sin(tilt) * std::cos(phi), std::sin(tilt) * std::sin(phi),
+                     std::cos(tilt));
+        for (int c = 0; c < 3; ++c) map.rgba.push_back(float(0.5 * (n[c] + 1)));
+        map.rgba.push_back(1.0f);
+    }
+    auto texel = [&](int x, int y) {
+        x = (x % 4 + 4) % 4;
+        y = (y % 4 + 4) % 4;
+        const float* p = &map.rgba[size_t(4 * (y * 4 + x))];
+        return 2.0 * glm::dvec3(p[0], p[1], p[2]) - 1.0;
+    };
+    auto expected = [&](bool slopes, glm::dvec2 uv, glm::dvec3 t, glm::dvec3 b, glm::dvec3 n) {
+        glm::dvec2 st = (glm::fract(uv * glm::dvec2(map.uvScale)) * 4.0) - 0.5;
+        glm::dvec2 i0 = glm::floor(st), w = st - i0;
+        glm::dvec3 nt(0.0);
+        for (int k = 0; k < 4; ++k) {
+            int dx = k & 1, dy = k >> 1;
+            glm::dvec3 v = texel(int(i0.x) + dx, int(i0.y) + dy);
+            if (slopes) {
+                v = glm::normalize(v);
+                v = glm::dvec3(v.x / v.z, v.y / v.z, 1.0);
+            }
+            nt += (dx ? w.x : 1 - w.x) * (dy ? w.y : 1 - w.y) * v;
+        }
+        return glm::normalize(nt.x * t + nt.y * b + nt.z * n);
+    };
+    std::vector<std::vector<glm::vec4>> cols;
+    for (int i = 0; i < 512; ++i) {
+        double a = u01(rng), c = u01(rng);
+        if (a + c > 1) a = 1 - a, c = 1 - c;
+        cols.push_back({glm::vec4(float(i % 2), float(a), float(c), 0.0f)});
+    }
+    double worst[2] = {0, 0}, apart[2] = {0, 0};
+    for (bool slopes : {false, true}) {
+        Scene s;
+        s.sourceFile = "<normal map>";
+        s.meshes.push_back(makeRectangle());
+        Material m;
+        m.normalMap = 0;
+        m.normalMapUseSlopes = slopes;
+        s.materials.push_back(m);
+        s.textures.push_back(map);
+        Shape quad;
+        quad.name = "quad";
+        quad.mesh = 0;
+        quad.material = 0;
+        s.shapes.push_back(quad);
+        Light env;
+        env.type = LightType::Constant;
+        s.lights.push_back(env);
+        s.camera.toWorld = lookAtMatrix({0, 0, 4}, {0, 0, 0}, {0, 1, 0});
+        auto out = test::runColumns(s, "tests/data/shading_normal.comp", cols, 5);
+        for (size_t i = 0; i < cols.size(); ++i) {
+            auto at = [&](int row) { return glm::dvec3(glm::vec3(out[i][row])); };
+            glm::dvec2 uv(out[i][1].x, out[i][1].y);
+            glm::dvec3 want = expected(slopes, uv, at(2), at(3), at(4));
+            glm::dvec3 other = expected(!slopes, uv, at(2), at(3), at(4));
+            worst[slopes] = std::max(worst[slopes], glm::length(at(0) - want));
+            apart[slopes] = std::max(apart[slopes], glm::length(other - want));
+        }
+        EXPECT_LT(worst[slopes], 2e-5) << (slopes ? "slopes" : "normals");
+        EXPECT_GT(apart[slopes], 0.05) << "the two modes cannot be told apart here";
+    }
+    std::printf(
+        "normal maps: worst |n - expected| %.2g (normals), %.2g (slopes); the modes differ by up "
+        "to %.2f\n",
+        worst[0], worst[1], apart[1]);
 }

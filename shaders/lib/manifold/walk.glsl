@@ -63,16 +63,17 @@ bool manifold_material_specular(Material m) {
 // cell), the interpolated normal, and the tangent frame, which is dp/du made orthogonal to the
 // interpolated normal. (The frame's fallback for degenerate UVs, which has no texture
 // variation to follow, is taken as fixed.)
-void manifold_normal_map(inout ManifoldVertex v, SurfacePoint sp, uint nmap, vec2 bary_s,
-                         vec2 bary_t) {
+void manifold_normal_map(inout ManifoldVertex v, SurfacePoint sp, Material mat, uint nmap,
+                         vec2 bary_s, vec2 bary_t) {
     vec2 uv0, uv1, uv2;
     triangle_uvs(sp.prim, uv0, uv1, uv2);
     vec2 duv_s = (uv1 - uv0) * bary_s.x + (uv2 - uv0) * bary_s.y;
     vec2 duv_t = (uv1 - uv0) * bary_t.x + (uv2 - uv0) * bary_t.y;
     vec4 g_u, g_v;
-    vec3 nt = 2.0 * texture_fetch_grad(nmap, sp.uv, g_u, g_v).rgb - 1.0;
-    vec3 dnt_s = 2.0 * (g_u.rgb * duv_s.x + g_v.rgb * duv_s.y);
-    vec3 dnt_t = 2.0 * (g_u.rgb * duv_t.x + g_v.rgb * duv_t.y);
+    vec3 nt = normal_map_tangent_normal(mat, texture_fetch_grad(nmap, sp.uv, g_u, g_v).rgb);
+    float decode = material_normal_slopes(mat) ? 1.0 : 2.0;  // d nt / d texel
+    vec3 dnt_s = decode * (g_u.rgb * duv_s.x + g_v.rgb * duv_s.y);
+    vec3 dnt_t = decode * (g_u.rgb * duv_t.x + g_v.rgb * duv_t.y);
 #ifdef LOOM_TEST_NORMAL_MAP_CONSTANT_TEXELS  // the ablation the SMS tests must detect
     dnt_s = vec3(0.0);
     dnt_t = vec3(0.0);
@@ -124,7 +125,7 @@ ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     v.reflection = material_type(m) == MATERIAL_CONDUCTOR || material_type(m) == MATERIAL_ROUGH_CONDUCTOR;
     v.eta = material_eta(m);
     uint nmap = material_normal_map(m);
-    if (nmap != MATERIAL_NO_TEXTURE) manifold_normal_map(v, sp, nmap, uv_s, uv_t);
+    if (nmap != MATERIAL_NO_TEXTURE) manifold_normal_map(v, sp, m, nmap, uv_s, uv_t);
     return v;
 }
 
