@@ -37,8 +37,10 @@ vec3 mnee_dr_contribution(ShadingPoint sh, vec3 wo_world, ManifoldLight ml, Copl
     c.k = 1u;
     c.end_at_infinity = ml.directional;
     c.v[0] = manifold_vertex(res.prim, res.bary);
-    float radiance_scale;
-    vec3 T = manifold_chain_throughput(c, sh.sp.p, radiance_scale);
+    // Eq. 25 as the paper writes it: without etendue_scale, which SMS divides its point and
+    // directional lights by (interpolated normals; passes/sms/README.md "Flux to radiance").
+    float radiance_scale, etendue_scale;
+    vec3 T = manifold_chain_throughput(c, sh.sp.p, ml.y, radiance_scale, etendue_scale);
     vec3 wi_local = shading_to_local(sh, normalize(res.M - sh.sp.p));
     vec3 f = bsdf_eval(sh.mat, shading_to_local(sh, wo_world), wi_local);
     vec3 I;

@@ -810,7 +810,7 @@ RoughMirrorCheck roughMirrorUnderPointLight(double alpha, int frames) {
 
 // The offset normal turns the flat mirror into a surface that reflects about m != n_g, which
 // changes a beam's etendue: the point light's flux form must be turned into the radiance form
-// the path tracer carries (manifold_chain_flux_to_radiance). Kept as flux
+// the path tracer carries (manifold_chain_throughput's etendue_scale). Kept as flux
 // (LOOM_TEST_FLUX_FORM_KEPT), alpha 0.4 reads 3 % dark (measured |z| 6.2 at 256 frames).
 TEST(SpecularManifoldSampling, RoughMirrorUnderPointLightMatchesQuadrature) {
     auto r = roughMirrorUnderPointLight(0.2, 64);

@@ -421,8 +421,8 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
     vec3 wi_local = shading_to_local(sh0, wi);
     vec3 f = bsdf_eval(sh0.mat, wo, wi_local);
     if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
-    float radiance_scale;
-    vec3 T = manifold_chain_throughput(c, tr.x0, radiance_scale);
+    float radiance_scale, etendue_scale;
+    vec3 T = manifold_chain_throughput(c, tr.x0, tr.y, radiance_scale, etendue_scale);
 #ifdef MANIFOLD_ROUGH_CASTERS
     T *= manifold_chain_rough_weight(c, tr.x0, tr.y);
 #endif
@@ -442,8 +442,7 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
         } else {
             E = scene_lights[ml.light].p1.rgb;
         }
-        L = E * manifold_chain_flux_to_radiance(c, tr.x0, tr.y) /
-            (max(abs(wi_local.z), 1e-8) * radiance_scale);
+        L = E / (max(abs(wi_local.z), 1e-8) * radiance_scale * etendue_scale);
         G = manifold_geometric_term(c, tr.x0, tr.y, false, tr.endpoint_det);
     } else {
         L = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n,

@@ -390,18 +390,32 @@ float manifold_geometric_term(ManifoldChain c, vec3 x0, vec3 y, bool from_light,
 // Throughput of the chain's specular vertices for radiance flowing y -> x0, as the path
 // tracer's delta BSDF samples weigh it: conductor specular F, dielectric transmittance
 // (1 - F) / eta^2 with eta across the interface from x0's side (bsdf.glsl dielectric_sample).
-// Zero for a one-sided conductor seen from behind. radiance_scale is the product of the 1/eta^2
-// factors, (n_x0 / n_y)^2: flux from a point or directional light crosses the chain with
-// T / radiance_scale (energy, no radiance compression), an area light's radiance with T.
-vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, out float radiance_scale) {
+// Zero for a one-sided conductor seen from behind. Flux from a point or directional light
+// (irradiance I d omega_y / dA_x0, or E times the beam's area ratio) crosses the chain with
+// T / (radiance_scale etendue_scale):
+//  - radiance_scale, the product of the 1/eta^2 factors, (n_x0 / n_y)^2: energy, no radiance
+//    compression;
+//  - etendue_scale, the product of |l.n_g| |c.m| / (|c.n_g| |l.m|) (c towards x0, l towards y):
+//    a vertex that scatters about a normal m other than its geometric normal n_g (interpolated
+//    or mapped shading normals, a rough vertex's offset normal) changes the beam's etendue by
+//    this (reflection keeps solid angle about m, refraction scales it by eta^2 |c.m| / |l.m|),
+//    while the path tracer's specular lobes keep radiance. 1 on flat geometry.
+// An area light's radiance crosses with T.
+vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, vec3 y, out float radiance_scale,
+                               out float etendue_scale) {
     vec3 T = vec3(1.0);
     radiance_scale = 1.0;
+    etendue_scale = 1.0;
     for (uint i = 0u; i < c.k; ++i) {
         ManifoldVertex v = c.v[i];
         // Material data stays out of the vertex: a walk carries two chains per lane.
         Material m = scene_materials[scene_shapes[v.shape].material];
         vec3 wo = normalize(manifold_chain_prev(c, i, x0) - v.p);  // towards the camera side
+        vec3 wl = normalize(manifold_chain_next(c, i, y) - v.p);   // towards the light
         float cos_o = dot(wo, v.n);
+#ifndef LOOM_TEST_FLUX_FORM_KEPT  // (the ablation the SMS tests must detect)
+        etendue_scale *= abs(dot(wl, v.ng)) * abs(cos_o) / (abs(dot(wo, v.ng)) * abs(dot(wl, v.n)));
+#endif
         if (v.reflection) {
             if (cos_o <= 0.0 && !material_two_sided(m)) return vec3(0.0);
             T *= m.specular.rgb * fresnel_conductor(abs(cos_o), m.cond_eta.rgb, m.cond_k.rgb);
@@ -414,28 +428,6 @@ vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, out float radiance_scal
         }
     }
     return T;
-}
-
-// Flux from a point or directional light (irradiance I d omega_y / dA_x0, or E times the
-// beam's area ratio) against the radiance the path tracer carries: a vertex that scatters about
-// a normal m other than its geometric normal n_g (an interpolated or mapped shading normal, a
-// rough vertex's offset normal) changes the beam's etendue by |l.n_g| |c.m| / (|c.n_g| |l.m|)
-// (c towards the camera side, l towards the light; reflection keeps solid angle about m,
-// refraction scales it by eta^2 |c.m| / |l.m|), while the path tracer's specular lobes keep
-// radiance (times F, or (1 - F) / eta^2). The product of the inverse factors turns the flux form
-// into the radiance form; 1 where every vertex scatters about its geometric normal.
-float manifold_chain_flux_to_radiance(ManifoldChain c, vec3 x0, vec3 y) {
-    float r = 1.0;
-    for (uint i = 0u; i < c.k; ++i) {
-        ManifoldVertex v = c.v[i];
-        vec3 wc = normalize(manifold_chain_prev(c, i, x0) - v.p);
-        vec3 wl = normalize(manifold_chain_next(c, i, y) - v.p);
-        r *= abs(dot(wc, v.ng)) * abs(dot(wl, v.n)) / (abs(dot(wl, v.ng)) * abs(dot(wc, v.n)));
-    }
-#ifdef LOOM_TEST_FLUX_FORM_KEPT  // the ablation the SMS tests must detect
-    r = 1.0;
-#endif
-    return r;
 }
 
 #ifdef MANIFOLD_ROUGH_CASTERS
