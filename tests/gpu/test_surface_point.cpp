@@ -25,22 +25,27 @@ constexpr uint32_t kStride = 12;  // vec4 per point, see surface_point.comp
 constexpr float kStep = 0.05f;    // barycentric step of the central differences
 constexpr double kEps = 0x1p-24;  // float unit roundoff
 
-Scene sphereScene() {
+// One shape (mesh, material) under a constant environment, the camera on +z.
+Scene oneShapeScene(Mesh mesh, const Material& material) {
     Scene s;
     s.sourceFile = "<surface point>";
-    // 30 degrees between neighbouring vertex normals: dn/du ~ 0.5, normalization term ~ 0.1.
-    s.meshes.push_back(makeSphere(6, 12));
-    s.materials.push_back(Material{});
-    Shape sphere;
-    sphere.name = "sphere";
-    sphere.mesh = 0;
-    sphere.material = 0;
-    s.shapes.push_back(sphere);
+    s.meshes.push_back(std::move(mesh));
+    s.materials.push_back(material);
+    Shape shape;
+    shape.name = "shape";
+    shape.mesh = 0;
+    shape.material = 0;
+    s.shapes.push_back(shape);
     Light env;
     env.type = LightType::Constant;
     s.lights.push_back(env);
     s.camera.toWorld = lookAtMatrix({0, 0, 4}, {0, 0, 0}, {0, 1, 0});
     return s;
+}
+
+Scene sphereScene() {
+    // 30 degrees between neighbouring vertex normals: dn/du ~ 0.5, normalization term ~ 0.1.
+    return oneShapeScene(makeSphere(6, 12), Material{});
 }
 
 glm::dvec3 vec(const float* p) {
@@ -200,23 +205,11 @@ TEST(ShadingPoint, NormalMapsMatchTheirTexelsAsNormalsOrSlopes) {
     }
     double worst[2] = {0, 0}, apart[2] = {0, 0};
     for (bool slopes : {false, true}) {
-        Scene s;
-        s.sourceFile = "<normal map>";
-        s.meshes.push_back(makeRectangle());
         Material m;
         m.normalMap = 0;
         m.normalMapUseSlopes = slopes;
-        s.materials.push_back(m);
+        Scene s = oneShapeScene(makeRectangle(), m);
         s.textures.push_back(map);
-        Shape quad;
-        quad.name = "quad";
-        quad.mesh = 0;
-        quad.material = 0;
-        s.shapes.push_back(quad);
-        Light env;
-        env.type = LightType::Constant;
-        s.lights.push_back(env);
-        s.camera.toWorld = lookAtMatrix({0, 0, 4}, {0, 0, 0}, {0, 1, 0});
         auto out = test::runColumns(s, "tests/data/shading_normal.comp", cols, 5);
         for (size_t i = 0; i < cols.size(); ++i) {
             auto at = [&](int row) { return glm::dvec3(glm::vec3(out[i][row])); };
