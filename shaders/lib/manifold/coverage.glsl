@@ -35,9 +35,7 @@ bool manifold_chain_surface(uint shape_flags, Material m) {
 // reflection off conductors): delta, or glossy at a rough vertex the walk samples an offset
 // normal for (MANIFOLD_ROUGH_CASTERS).
 bool manifold_chain_lobe(Material m, uint bsdf_sample_flags) {
-    uint t = material_type(m);
-    bool conductor = t == MATERIAL_CONDUCTOR || t == MATERIAL_ROUGH_CONDUCTOR;
-    uint want = conductor ? BSDF_REFLECTION : BSDF_TRANSMISSION;
+    uint want = manifold_material_reflects(m) ? BSDF_REFLECTION : BSDF_TRANSMISSION;
     uint lobe = BSDF_DELTA;
 #ifdef MANIFOLD_ROUGH_CASTERS
     if (manifold_material_rough(m)) lobe = BSDF_GLOSSY;
@@ -48,6 +46,13 @@ bool manifold_chain_lobe(Material m, uint bsdf_sample_flags) {
 // A light SMS samples (its entry's flags carry the shape's or the light's tags).
 bool manifold_emitter_light(uint light) {
     return (scene_lights[light].flags & SHAPE_CAUSTIC_EMITTER) != 0u;
+}
+
+// An environment light (map or constant): SMS chains to it end at infinity in a sampled
+// direction (manifold/sms.glsl).
+bool manifold_light_is_environment(uint light) {
+    uint t = scene_lights[light].type;
+    return light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT);
 }
 
 // Tracks, along a camera path, whether the vertices since the receiver form a covered chain.
@@ -125,8 +130,7 @@ bool manifold_coverage_covers_light_sample(ManifoldCoverage c, ShadingPoint sh, 
     uint lobe = BSDF_GLOSSY | (wo.z * wi.z > 0.0 ? BSDF_REFLECTION : BSDF_TRANSMISSION);
     ManifoldCoverage next = manifold_coverage_step(c, sh, depth, receiver_depth, max_chain, lobe);
 #ifndef MANIFOLD_ENVIRONMENT_CHAINS
-    uint t = scene_lights[light].type;
-    if (light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT)) return false;
+    if (manifold_light_is_environment(light)) return false;
 #endif
     return manifold_coverage_covers(next, scene_lights[light].flags);
 #else

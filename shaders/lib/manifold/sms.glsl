@@ -43,12 +43,6 @@ vec3 manifold_sample_caster(vec3 u) {
     return sample_triangle_point(u.xy, a, b, c);
 }
 
-// An environment light (map or constant): the chain ends at infinity in a sampled direction.
-bool manifold_light_is_environment(uint light) {
-    uint t = scene_lights[light].type;
-    return light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT);
-}
-
 // The light end of a chain: a point sampled by area on an emissive triangle (pdf per area,
 // selection included), or a point or spot light (pdf = selection probability).
 struct ManifoldLight {

@@ -40,6 +40,12 @@ struct ManifoldVertex {
 #endif
 };
 
+// Conductors (smooth or rough) reflect in a chain; dielectrics refract.
+bool manifold_material_reflects(Material m) {
+    uint t = material_type(m);
+    return t == MATERIAL_CONDUCTOR || t == MATERIAL_ROUGH_CONDUCTOR;
+}
+
 bool manifold_material_rough(Material m) {
     uint t = material_type(m);
     return t == MATERIAL_ROUGH_CONDUCTOR || t == MATERIAL_ROUGH_DIELECTRIC;
@@ -122,7 +128,7 @@ ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     v.dn_ds = sp.dn_du * uv_s.x + sp.dn_dv * uv_s.y;
     v.dn_dt = sp.dn_du * uv_t.x + sp.dn_dv * uv_t.y;
     v.tangent = sp.dp_du;
-    v.reflection = material_type(m) == MATERIAL_CONDUCTOR || material_type(m) == MATERIAL_ROUGH_CONDUCTOR;
+    v.reflection = manifold_material_reflects(m);
     v.eta = material_eta(m);
     uint nmap = material_normal_map(m);
     if (nmap != MATERIAL_NO_TEXTURE) manifold_normal_map(v, sp, m, nmap, uv_s, uv_t);
