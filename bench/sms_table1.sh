@@ -61,9 +61,11 @@ if [ "${EQUAL_TIME:-0}" = 1 ]; then
     # distance of 50), so the reference is a long unbiased SMS run (graphs/sms.json, checked
     # against the path tracer on the project scenes), at the paper's 16:9 aspect.
     # sms-plane's unbiased SMS costs ~4 s a frame at 64 x 36 (104 Bernoulli trials per
-    # solution): a shorter reference and a longer budget there.
+    # solution): a shorter reference and a longer budget there. sms-pool-lite's sky is an
+    # environment map with a sun the path tracer finds only through BSDF samples.
     for spec in "sms-sphere/sphere_sms_constfloor.xml 1024 ${BUDGET_MS:-8000}" \
-                "sms-plane/plane_sms_constfloor.xml 256 ${PLANE_BUDGET_MS:-16000}"; do
+                "sms-plane/plane_sms_constfloor.xml 256 ${PLANE_BUDGET_MS:-16000}" \
+                "sms-pool-lite/pool_sms.xml 1024 ${BUDGET_MS:-8000}"; do
         set -- $spec
         [ -e "../shared/scenes/$1" ] || continue
         "$LOOM" run scripts/sms_equal_time.lua configs=bench/data/sms_configs.json \

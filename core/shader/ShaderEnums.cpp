@@ -60,5 +60,10 @@ LOOM_REGISTER_SHADER_ENUM(ManifoldConstraint, "MANIFOLD_CONSTRAINT",
                           {"angle_difference", "half_vector"},
                           "specular constraint: angle difference (Zeltner et al. 2020 Sec. 5.1) "
                           "or half vector (Hanika et al. 2015)");
+// How a manifold walk controls its Newton step size (shaders/lib/manifold/sms.glsl).
+LOOM_REGISTER_SHADER_ENUM(ManifoldStepControl, "MANIFOLD_STEP", {"reprojection", "descent"},
+                          "Newton step size: halved when the re-traced chain leaves its shapes "
+                          "(Zeltner et al. 2020 reference code), or also when the constraint "
+                          "error does not fall");
 
 }  // namespace loom

@@ -39,6 +39,7 @@ ManifoldShiftSettings manifold_reuse_settings(uint constraint, uint iterations, 
     ss.ms.max_iterations = iterations;
     ss.ms.solver_threshold = threshold;
     ss.ms.min_segment = min_segment;
+    ss.ms.step_control = MANIFOLD_STEP_REPROJECTION;  // the reference rule
     ss.ms.max_chain = min(max_chain, uint(MANIFOLD_MAX_VERTICES));
     ss.uniqueness_threshold = uniqueness;
     ss.geometric_clamp = clamp;

@@ -47,6 +47,7 @@ void main() {
 
     ManifoldSettings ms;
     ms.constraint = pc.constraint;
+    ms.step_control = MANIFOLD_STEP_REPROJECTION;
     ms.max_iterations = pc.maxIterations;
     ms.solver_threshold = pc.solverThreshold;
     ms.min_segment = pc.minSegment;

@@ -23,6 +23,7 @@ layout(push_constant) uniform Params {
     uint prior;                // read ManifoldPrior's tile sets (0: partitioning alone)
     float alpha;               // mixture weight of the prior, for the pair and the seed
     uint constraint;           // MANIFOLD_CONSTRAINT_*
+    uint stepControl;          // MANIFOLD_STEP_*
     uint maxIterations;
     float solverThreshold;
     float uniquenessThreshold;
@@ -78,6 +79,7 @@ uint psms_pixel_index(uvec2 p) { return p.y * pc.frameSize.x + p.x; }
 ManifoldSettings psms_settings() {
     ManifoldSettings ms;
     ms.constraint = pc.constraint;
+    ms.step_control = pc.stepControl;
     ms.max_iterations = pc.maxIterations;
     ms.solver_threshold = pc.solverThreshold;
     ms.min_segment = pc.minSegment;

@@ -12,6 +12,11 @@ namespace loom {
 inline void reflectManifoldWalk(PassReflection& r) {
     r.paramEnum("constraint", "angle_difference", shaderEnum("MANIFOLD_CONSTRAINT"))
         .doc("specular constraint of the walk (Zeltner et al. Sec. 5.1)");
+    r.paramEnum("stepControl", "reprojection", shaderEnum("MANIFOLD_STEP"))
+        .doc(
+            "Newton step size: halved when the re-traced chain leaves its shapes (reference), or "
+            "also when max |C_i| does not fall (descent: half-vector walks out of a denser "
+            "medium need it)");
     r.param("maxIterations", 20).range(1, 1000).doc("Newton steps per walk (halvings count)");
     r.param("solverThreshold", 1e-5).min(0).doc("convergence: every |C_i| below this");
     r.param("uniquenessThreshold", 1e-5)

@@ -81,7 +81,8 @@ public:
                             {"MANIFOLD_ENVIRONMENT_CHAINS", "1"}};
         // Rough casters' offset normals, compiled in only where the scene has such casters
         // (llvmpipe runs untaken branches masked).
-        if (mRoughCasters && param<bool>("roughCasters")) chain["MANIFOLD_ROUGH_CASTERS"] = "1";
+        if (mRoughCasters && param<bool>("roughCasters"))
+            chain.insert_or_assign("MANIFOLD_ROUGH_CASTERS", std::string("1"));
         auto path = compileKernel(*this, ctx.shaders(), "passes/sms/sms_path.comp", chain);
         auto trials = compileKernel(*this, ctx.shaders(), "passes/sms/sms_trials.comp", chain);
         auto counters = mCounters.reset(ctx.gpu(), ctx.cmd());

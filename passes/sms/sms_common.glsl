@@ -13,6 +13,7 @@ layout(push_constant) uniform Params {
     uint seed;
     uint estimator;            // ESTIMATOR_UNBIASED / _BIASED / _MNEE
     uint constraint;           // MANIFOLD_CONSTRAINT_*
+    uint stepControl;          // MANIFOLD_STEP_*
     uint maxIterations;
     float solverThreshold;
     float uniquenessThreshold;
@@ -77,6 +78,7 @@ uint sms_pixel_index(uvec2 p) { return p.y * pc.frameSize.x + p.x; }
 ManifoldSettings sms_settings() {
     ManifoldSettings ms;
     ms.constraint = pc.constraint;
+    ms.step_control = pc.stepControl;
     ms.max_iterations = pc.maxIterations;
     ms.solver_threshold = pc.solverThreshold;
     ms.min_segment = pc.minSegment;

@@ -27,6 +27,7 @@ void main() {
         ss.ms.max_iterations = 5u;
         ss.ms.solver_threshold = 1e-5;
         ss.ms.min_segment = 1e-4;
+        ss.ms.step_control = MANIFOLD_STEP_REPROJECTION;
         ss.ms.max_chain = 2u;
         ss.uniqueness_threshold = 1e-5;
         ss.geometric_clamp = 0.0;

@@ -45,6 +45,7 @@ void main() {
     ms.max_iterations = uint(cfg(3).w);
     ms.solver_threshold = cfg(7).w;
     ms.min_segment = 1e-4;
+    ms.step_control = MANIFOLD_STEP_REPROJECTION;
     ms.max_chain = 1u;
     ManifoldSeedSpace space = manifold_seed_space(x0, ng0, cfg(4));
     vec3 target = cfg(5).xyz;

@@ -3,7 +3,7 @@
 // re-projection, visibility) against the loaded scene. Input rows, per column: 0 x0, 1 its
 // geometric normal, 2 y (light point), 3 ny (area light normal, 0: point light; w = 1: y is a direction, a directional light), 4 seed point
 // (w = 1: straight line to y, MNEE), 5 (constraint, max iterations, threshold, max chain),
-// 6/7 es/et (the end point's plane). Output rows: 0 (phase, iterations, k, endpoint det),
+// 6/7 es/et (the end point's plane; 6.w the step control). Output rows: 0 (phase, iterations, k, endpoint det),
 // 1..4 chain vertices (w = triangle), 5 (beta, error of the final chain, 0, 0), 6 the first
 // vertex's geometric normal.
 #include "lib/bvh.glsl"
@@ -25,6 +25,7 @@ void main() {
     ms.max_iterations = uint(cfg.y);
     ms.solver_threshold = cfg.z;
     ms.min_segment = 1e-5;
+    ms.step_control = uint(row(x, 6).w);
     ms.max_chain = uint(cfg.w);
     ManifoldTrial tr = manifold_trial_start(row(x, 0).xyz, row(x, 1).xyz, row(x, 2).xyz,
                                             row(x, 3).xyz, row(x, 6).xyz, row(x, 7).xyz,

@@ -41,6 +41,7 @@ struct WalkInput {
     float threshold = 1e-5f;
     int maxChain = 2;
     glm::vec3 es{1, 0, 0}, et{0, 0, 1};
+    int stepControl = 0;  // 0 reprojection, 1 descent (MANIFOLD_STEP_*)
 };
 struct WalkResult {
     int phase, iterations, k;
@@ -59,7 +60,7 @@ std::vector<WalkResult> runWalks(const scene::Scene& scene, const std::vector<Wa
                         glm::vec4(w.ny, w.directional ? 1 : 0),
                         glm::vec4(w.seed, w.straight ? 1 : 0),
                         glm::vec4(w.constraint, w.maxIterations, w.threshold, w.maxChain),
-                        glm::vec4(w.es, 0), glm::vec4(w.et, 0)});
+                        glm::vec4(w.es, w.stepControl), glm::vec4(w.et, 0)});
     auto out = runColumns(scene, "passes/sms/tests/manifold_walk.comp", cols, 8);
     std::vector<WalkResult> res(in.size());
     for (size_t i = 0; i < in.size(); ++i) {
@@ -188,12 +189,12 @@ TEST(SpecularManifoldWalk, MirrorSphereConvergesToTheReflectionPoint) {
 
 using test::poolScene;
 
-// Half-vector walks refracting out of the denser side do not converge yet (issue 15 note).
-constexpr bool kHalfVectorFromInside = false;
-
-// The flat pool (poolScene) with a point light above it: the walk
-// converges to the refraction point of Snell's law, found here by bisection in the plane of
-// incidence.
+// The flat pool (poolScene) with a point light above it: walks from the floor refract out of the
+// water and converge to the refraction point of Snell's law, found here by bisection in the
+// plane of incidence. The same 64 seeds walk with each constraint and step control. The
+// half-vector constraint saturates (|C| -> 1) where the walk overshoots, so with the reference's
+// step control (halve only when the re-trace leaves the surface) most of its walks diverge;
+// descent (also halve when max |C_i| does not fall) must rescue them.
 TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
     test::TempDir dir("loom-sms");
     auto scene = sceneFromJson(
@@ -203,7 +204,7 @@ TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
     const glm::dvec3 light(0.4, 2, -0.2);
     std::mt19937 rng(8);
     std::uniform_real_distribution<float> u(-1, 1);
-    std::vector<WalkInput> in;
+    std::vector<WalkInput> seeds;
     for (int i = 0; i < 64; ++i) {
         WalkInput w;
         w.x0 = glm::vec3(1.5f * u(rng), 0, 1.5f * u(rng));
@@ -211,11 +212,25 @@ TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
         w.y = glm::vec3(light);
         w.ny = glm::vec3(0);
         w.seed = glm::vec3(2.5f * u(rng), 1, 2.5f * u(rng));
-        w.constraint = kHalfVectorFromInside ? i % 2 : 0;
-        in.push_back(w);
+        seeds.push_back(w);
     }
+    struct Mode {
+        const char* name;
+        int constraint, stepControl;
+    };
+    const Mode modes[] = {{"angle difference, reprojection", 0, 0},
+                          {"angle difference, descent", 0, 1},
+                          {"half vector, reprojection", 1, 0},
+                          {"half vector, descent", 1, 1}};
+    std::vector<WalkInput> in;
+    for (const Mode& m : modes)
+        for (WalkInput w : seeds) {
+            w.constraint = m.constraint;
+            w.stepControl = m.stepControl;
+            in.push_back(w);
+        }
     auto res = runWalks(scene, in);
-    int converged = 0;
+    int converged[4] = {};
     for (size_t i = 0; i < in.size(); ++i) {
         glm::dvec3 x0(in[i].x0);
         glm::dvec3 flat = light - x0;
@@ -228,13 +243,20 @@ TEST(SpecularManifoldWalk, FlatInterfaceConvergesToTheSnellPoint) {
         }
         glm::dvec3 expect = x0 + glm::dvec3(0, 1, 0) + (D > 0 ? lo / D : 0.0) * flat;
         if (res[i].phase != kConverged) continue;
-        ++converged;
+        ++converged[i / seeds.size()];
         EXPECT_EQ(res[i].k, 1);
-        EXPECT_LT(glm::length(glm::dvec3(res[i].v[0]) - expect), 1e-4) << "walk " << i;
+        EXPECT_LT(glm::length(glm::dvec3(res[i].v[0]) - expect), 1e-4)
+            << modes[i / seeds.size()].name << ", walk " << i % seeds.size();
     }
-    // Seeds past the critical angle start from total internal reflection and mostly fail.
-    EXPECT_GT(converged, 32);
-    std::printf("flat interface: %d of %zu walks converged\n", converged, in.size());
+    for (int m = 0; m < 4; ++m)
+        std::printf("flat interface, %s: %d of %zu walks converged\n", modes[m].name, converged[m],
+                    seeds.size());
+    // Seeds past the critical angle start from total internal reflection and some fail.
+    EXPECT_GT(converged[0], 32);
+    EXPECT_GT(converged[1], 32);
+    EXPECT_GT(converged[3], 40);
+    // Why descent exists: without it the half-vector walks mostly diverge.
+    EXPECT_LT(converged[2], converged[3] - 16);
 }
 
 TEST(SpecularManifoldSampling, PoolUnderDirectionalLightMatchesClosedForm) {

@@ -24,6 +24,7 @@ layout(std430) readonly buffer ManifoldCasters { uvec2 manifold_casters[]; };
 
 struct ManifoldSettings {
     uint constraint;         // MANIFOLD_CONSTRAINT_*
+    uint step_control;       // MANIFOLD_STEP_*
     uint max_iterations;     // Newton steps per walk, halvings included
     float solver_threshold;  // convergence: every |C_i| below this
     float min_segment;       // shorter chain segments fail (scene-scale dependent)
@@ -184,6 +185,8 @@ struct ManifoldTrial {
     uint iterations;         // Newton steps taken (halvings included)
     float beta;              // step size
     vec2 step;               // the current Newton step of the first vertex
+    float error;             // max |C_i| of the chain the step was taken from
+    vec3 anchor_p, anchor_s, anchor_t;  // that chain's first vertex and its tangent frame
     float endpoint_det;      // end-point Jacobian determinant of the chain (walk.glsl)
     vec3 es, et;             // the plane the end point moves in: the area light's, or x0's
 #ifdef MANIFOLD_ROUGH_CASTERS
@@ -245,6 +248,10 @@ ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, 
     tr.iterations = 0u;
     tr.beta = 1.0;
     tr.step = vec2(0.0);
+    tr.error = 0.0;
+    tr.anchor_p = x0;
+    tr.anchor_s = vec3(0.0);
+    tr.anchor_t = vec3(0.0);
     tr.endpoint_det = 0.0;
     tr.es = es;
     tr.et = et;
@@ -260,11 +267,22 @@ ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, 
     return tr;
 }
 
+// Where the first vertex moves for step size beta: p - beta (s dX0 + t dX1) (Zeltner Sec. 4.3),
+// from the chain the step was taken at.
 void manifold_trial_propose(inout ManifoldTrial tr) {
     tr.iterations += 1u;
-    manifold_trial_ray_towards(tr, tr.x0, tr.ng0, manifold_step_target(tr.chain, tr.step, tr.beta));
+    vec3 target = tr.anchor_p - tr.beta * (tr.anchor_s * tr.step.x + tr.anchor_t * tr.step.y);
+    manifold_trial_ray_towards(tr, tr.x0, tr.ng0, target);
     tr.proposal.k = 0u;
     tr.phase = TRIAL_RETRACE;
+}
+
+// A proposal that left the shape sequence (miss, other shape, total internal reflection):
+// halve the step (one of the max_iterations).
+void manifold_trial_reject(inout ManifoldTrial tr, ManifoldSettings ms) {
+    tr.beta *= 0.5;
+    if (tr.iterations >= ms.max_iterations) tr.phase = TRIAL_FAILED;
+    else manifold_trial_propose(tr);
 }
 
 // At an accepted chain: converged (then the shadow ray), or the next Newton step.
@@ -287,20 +305,22 @@ void manifold_trial_evaluate(inout ManifoldTrial tr, ManifoldSettings ms) {
         tr.phase = TRIAL_SHADOW;
         return;
     }
+    if (ms.step_control == MANIFOLD_STEP_DESCENT && tr.iterations > 0u &&
+        !(ls.error < tr.error)) {
+        manifold_trial_reject(tr, ms);
+        return;
+    }
     if (!ls.ok || tr.iterations >= ms.max_iterations) {
         tr.phase = TRIAL_FAILED;
         return;
     }
+    if (tr.iterations > 0u) tr.beta = min(1.0, 2.0 * tr.beta);
+    tr.error = ls.error;
+    tr.anchor_p = tr.chain.v[0].p;
+    tr.anchor_s = tr.chain.v[0].s;
+    tr.anchor_t = tr.chain.v[0].t;
     tr.step = ls.step;
     manifold_trial_propose(tr);
-}
-
-// A proposal that left the shape sequence (miss, other shape, total internal reflection):
-// halve the step (one of the max_iterations).
-void manifold_trial_reject(inout ManifoldTrial tr, ManifoldSettings ms) {
-    tr.beta *= 0.5;
-    if (tr.iterations >= ms.max_iterations) tr.phase = TRIAL_FAILED;
-    else manifold_trial_propose(tr);
 }
 
 // Continues the chain being traced past its last vertex v (index i): scatter specularly.
@@ -374,7 +394,6 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
         tr.proposal.k = i + 1u;
         if (!seeding && tr.proposal.k == tr.chain.k) {
             for (uint j = 0u; j < tr.chain.k; ++j) tr.chain.v[j] = tr.proposal.v[j];
-            tr.beta = min(1.0, 2.0 * tr.beta);
             evaluate = true;
 #ifdef MANIFOLD_TRUST_REGION
             if (!manifold_trial_in_region(tr)) {

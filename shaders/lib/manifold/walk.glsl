@@ -361,11 +361,6 @@ ManifoldLinearSolve manifold_linear_solve(uint kind, ManifoldChain c, vec3 x0, v
     return r;
 }
 
-// Where the first vertex moves for step size beta: p - beta (s dX0 + t dX1) (Zeltner Sec. 4.3).
-vec3 manifold_step_target(ManifoldChain c, vec2 step, float beta) {
-    return c.v[0].p - beta * (c.v[0].s * step.x + c.v[0].t * step.y);
-}
-
 // Whether the converged chain scatters the way its materials do: at a reflection both
 // neighbours lie on the same side of the geometric normal, at a refraction on opposite sides
 // (the half-vector constraint also vanishes for the other type), with no segment shorter
