@@ -5,8 +5,9 @@
 --   loom run scripts/sms_equal_time.lua [width=64 height=64 budget_ms=8000 steps=4 ...]
 --
 -- The caustic region: pixels where an unbiased SMS caustic estimate (graphs/sms.json,
--- accumCaustic.output, mask_frames frames) is at least mask_fraction of the reference's
--- luminance, i.e. where SMS-covered light is a large part of the pixel.
+-- accumCaustic.output, mask_frames frames, estimates at mask_receivers receivers per path,
+-- default 1) is at least mask_fraction of the reference's luminance, i.e. where SMS-covered
+-- light is a large part of the pixel.
 -- Each configuration renders until its summed GPU frame times reach budget_ms * 2^(k - steps),
 -- k = 1..steps (r:run_for_ms); at each step: relMSE over the image and over the caustic region
 -- (loom.metrics' relMSE, eps 0.01). The last step gives:
@@ -24,7 +25,8 @@
 -- ref_graph=graphs/sms.json renders the reference by that graph's accum.output over ref_frames
 -- frames instead of the path tracer (for scenes whose small lights the path tracer cannot find).
 -- Arguments: scenes (comma list; missing files are skipped), width, height, budget_ms, steps,
--- ref_frames, ref_spp, ref_graph, mask_frames, mask_fraction, regions, seed, configs, out,
+-- ref_frames, ref_spp, ref_graph, mask_frames, mask_fraction, mask_receivers, regions, seed,
+-- configs, out,
 -- per_frame, per_frame_sequences.
 -- Writes OUT/sms_equal_time.csv (every step), OUT/sms_regions.csv (energy per block),
 -- OUT/<scene>_caustic_relmse.png/.svg (convergence), OUT/<scene>_mask.png; prints tables.
@@ -36,6 +38,7 @@ local steps = loom.arg("steps", 4)
 local ref_frames, ref_spp = loom.arg("ref_frames", 64), loom.arg("ref_spp", 64)
 local mask_frames = loom.arg("mask_frames", 16)
 local mask_fraction = loom.arg("mask_fraction", 0.25)
+local mask_receivers = loom.arg("mask_receivers", 1)
 local regions = loom.arg("regions", 4)
 local seed = loom.arg("seed", 1)
 local out = loom.arg("out", "out/sms_equal_time")
@@ -107,7 +110,8 @@ for _, scene_arg in ipairs(scenes) do
     end
     -- The caustic region, from an unbiased SMS caustic estimate.
     local m = loom.renderer{graph = "graphs/sms.json", scene = scene, width = width,
-                            height = height, seed = seed + 7919}
+                            height = height, seed = seed + 7919,
+                            params = {["sms.maxReceivers"] = mask_receivers}}
     m:frames(mask_frames)
     local caustic = m:image("accumCaustic.output")
     m:close()

@@ -42,13 +42,16 @@ public:
             .optional()
             .doc("per pixel: Newton iterations, solution found, trials, SMS estimate taken");
         r.scratchTexture("path").doc("the path tracer's part");
-        r.scratchBuffer("pixels").bytesPerPixel(kPixelBytes).doc("estimator state per pixel");
+        const uint64_t receivers = uint64_t(maxReceivers());
+        r.scratchBuffer("pixels")
+            .bytesPerPixel(kPixelBytes * receivers)
+            .doc("estimator state per pixel and receiver");
         r.scratchBuffer("solutions")
-            .bytesPerPixel(kSolutionSetBytes)
-            .doc("biased SMS: unique solutions found per pixel");
-        r.scratchBuffer("active").bytesPerPixel(8).doc(
-            "two lists of the pixels whose estimate still runs (trial dispatches take them "
-            "packed)");
+            .bytesPerPixel(kSolutionSetBytes * receivers)
+            .doc("biased SMS: unique solutions found per pixel and receiver");
+        r.scratchBuffer("active")
+            .bytesPerPixel(8 * receivers)
+            .doc("two lists of the estimates that still run (trial dispatches take them packed)");
         r.paramEnum("estimator", "unbiased", {"unbiased", "biased", "mnee"})
             .doc(
                 "unbiased SMS (Bernoulli trials), biased SMS (unique solutions of M trials), or "
@@ -63,6 +66,12 @@ public:
         r.param("biasedTrials", 4).range(1, kMaxBiasedTrials).doc("biased: trials M per estimate");
         reflectCausticPath(r, 64);
         reflectReceiverDepth(r);
+        r.param("maxReceivers", 1)
+            .range(1, 8)
+            .doc(
+                "SMS estimates per camera path: at its first maxReceivers vertices with a smooth "
+                "lobe that are receivers (1: the first; more: caustics seen behind diffuse "
+                "bounces, as the reference integrator estimates at every depth)");
         r.param("roughCasters", true)
             .doc(
                 "walk rough conductors and dielectrics about sampled offset normals (Zeltner et "
@@ -71,14 +80,17 @@ public:
     void execute(ExecuteContext& ctx) override {
         const auto& scene = ctx.scene();
         buildCasters(ctx);
+        const std::string receivers = std::to_string(maxReceivers());
         ShaderDefines defines{{"HAS_STATS", ctx.has("stats") ? "1" : "0"},
-                              {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"}};
+                              {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"},
+                              {"MANIFOLD_MAX_RECEIVERS", receivers}};
         auto resolve = compileKernel(*this, ctx.shaders(), "passes/sms/sms_resolve.comp", defines);
         // Chains sized to maxChain: the walk state lives in registers or spills per lane, and
         // on lavapipe 2 vertices instead of 4 make the trials 2.6x faster (same image).
         // Environment lights end chains too (the path part leaves those paths out as well).
         ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))},
-                            {"MANIFOLD_ENVIRONMENT_CHAINS", "1"}};
+                            {"MANIFOLD_ENVIRONMENT_CHAINS", "1"},
+                            {"MANIFOLD_MAX_RECEIVERS", receivers}};
         // Rough casters' offset normals, compiled in only where the scene has such casters
         // (llvmpipe runs untaken branches masked).
         if (mRoughCasters && param<bool>("roughCasters"))
@@ -155,6 +167,10 @@ public:
     }
 
 private:
+    // reflect() runs before the parameters exist (to declare them): the default then.
+    int maxReceivers() const {
+        return params().count("maxReceivers") ? param<int>("maxReceivers") : 1;
+    }
     // Seeds: caster triangles (caustic_caster tags) with an inclusive area CDF, in the GPU
     // triangle order of SceneGpu (shapes in order, each shape's triangles contiguous).
     void buildCasters(ExecuteContext& ctx) {

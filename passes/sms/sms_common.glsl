@@ -73,7 +73,10 @@ layout(std430) buffer SmsCounters {
     uint sms_rays;
 };
 
-uint sms_pixel_index(uvec2 p) { return p.y * pc.frameSize.x + p.x; }
+// The estimate at the pixel's i-th receiver (MANIFOLD_MAX_RECEIVERS slots per pixel).
+uint sms_slot(uvec2 p, uint i) {
+    return (p.y * pc.frameSize.x + p.x) * uint(MANIFOLD_MAX_RECEIVERS) + i;
+}
 
 ManifoldSettings sms_settings() {
     ManifoldSettings ms;

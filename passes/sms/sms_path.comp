@@ -1,10 +1,11 @@
 #version 460
 // SpecularManifoldSampling, stage 1: the camera path by the reference path tracer without the
-// paths SMS covers (manifold/coverage.glsl), and, at the path's receiver (its first vertex with
-// a smooth lobe, behind at most receiverDepth specular vertices), the light sample an SMS
-// estimate connects to. The estimate takes the path's own specular prefix: the path part
-// leaves out the covered paths behind exactly that prefix, and the prefix's throughput weighs
-// the estimate. Stage 2 (sms_trials.comp) runs the estimate's walks.
+// paths SMS covers (manifold/coverage.glsl), and, at each of the path's receivers (among its
+// first maxReceivers vertices with a smooth lobe, behind at most receiverDepth specular vertices
+// since the one before), the light sample an SMS estimate connects to. The estimate takes the
+// path's own prefix: the path part leaves out the covered paths behind exactly that prefix, and
+// the prefix's throughput weighs the estimate. Stage 2 (sms_trials.comp) runs the estimate's
+// walks.
 #include "lib/camera.glsl"
 #include "lib/integrator/path.glsl"
 #include "lib/rng.glsl"
@@ -39,36 +40,36 @@ void main() {
     PathRadiance pr = path_trace(o, d, false, none, false, ps, rng);
     imageStore(pathImage, ivec2(pixel), vec4(pr.L, 1.0));
 
-    SmsPixel st;
-    st.hit = uvec4(~0u, 0u, 0u, SMS_NONE);
-    st.wo = vec4(-d, 0.0);
-    st.rng = uvec4(0u);
-    st.light_y = vec4(0.0);
-    st.light_n = vec4(0.0);
-    st.target = vec4(0.0);
-    st.value = vec4(0.0);
-    st.counts = uvec4(0u);
-    st.beta = vec4(0.0);
-    if (pr.smooth_found && pr.smooth_depth <= pc.receiverDepth) {
-        ShadingPoint sh = shading_point(pr.smooth_hit);
-        if (manifold_receiver(sh.shape_flags, sh.mat)) {
-            // A stream of its own: the path part stays the path tracer's image.
-            Rng srng = rng_init(pixel, pc.frameIndex, pc.seed ^ 0x5A17C0DEu);
+    for (uint i = 0u; i < uint(MANIFOLD_MAX_RECEIVERS); ++i) {
+        SmsPixel st;
+        st.hit = uvec4(~0u, 0u, 0u, SMS_NONE);
+        st.wo = vec4(-d, 0.0);
+        st.rng = uvec4(0u);
+        st.light_y = vec4(0.0);
+        st.light_n = vec4(0.0);
+        st.target = vec4(0.0);
+        st.value = vec4(0.0);
+        st.counts = uvec4(0u);
+        st.beta = vec4(0.0);
+        if (i < pr.receivers) {
+            // A stream of its own per receiver: the path part stays the path tracer's image.
+            Rng srng = rng_init(pixel, pc.frameIndex, pc.seed ^ (0x5A17C0DEu + i * 0x9E3779B9u));
             ManifoldLight ml = manifold_sample_light(vec3(rng_next2(srng), rng_next(srng)));
             if (ml.valid) {
-                st.hit = uvec4(pr.smooth_hit.prim, floatBitsToUint(pr.smooth_hit.bary),
+                Hit x0 = pr.receiver_hit[i];
+                st.hit = uvec4(x0.prim, floatBitsToUint(x0.bary),
                                pc.estimator == ESTIMATOR_BIASED ? SMS_BIASED : SMS_FIRST);
-                st.wo = vec4(pr.smooth_wo, 0.0);
-                st.beta = vec4(pr.smooth_beta, 0.0);
+                st.wo = vec4(pr.receiver_wo[i], 0.0);
+                st.beta = vec4(pr.receiver_beta[i], 0.0);
                 st.rng = srng.state;
                 st.light_y = vec4(ml.y, ml.pdf);
                 st.light_n = vec4(ml.n, uintBitsToFloat(ml.light));
                 atomicAdd(sms_samples, 1u);
-                work_list_append(0u, sms_pixel_index(pixel));
+                work_list_append(0u, sms_slot(pixel, i));
             }
         }
+        sms_pixels[sms_slot(pixel, i)] = st;
     }
-    sms_pixels[sms_pixel_index(pixel)] = st;
     atomicAdd(sms_rays, pr.rays);
     atomicMax(sms_max_bvh_iterations, bvh_iterations);
 }

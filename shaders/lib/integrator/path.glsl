@@ -20,8 +20,8 @@ struct PathSettings {
     bool mis;              // weigh NEE against BSDF-sampled emitter hits (else hits count 0
                            // when nee, 1 without it)
     uint covered_max_chain;  // > 0: drop the paths SMS covers, chains up to this length...
-    uint covered_depth;      // ...from the first vertex with a smooth lobe, a receiver at
-                             // most this deep (0: the primary hit; coverage.glsl)
+    uint covered_depth;      // ...from receivers behind at most this many specular vertices
+                             // (0: seen directly; coverage.glsl)
 };
 
 struct PathRadiance {
@@ -32,14 +32,13 @@ struct PathRadiance {
     uint rays;      // closest-hit and shadow rays traced
     bool found;     // the camera ray hit a surface
     Hit first;      // that hit
-    // The path's first vertex with a smooth lobe (everything before it purely specular): where
-    // a caustic estimator adds what the path leaves out (manifold/coverage.glsl receivers seen
-    // through specular surfaces), with the throughput and direction the path arrived with.
-    bool smooth_found;
-    Hit smooth_hit;
-    uint smooth_depth;  // specular vertices before it
-    vec3 smooth_beta;   // throughput up to it (Russian roulette included)
-    vec3 smooth_wo;     // unit direction from it back along the path
+    // The path's receivers (manifold/coverage.glsl, at most MANIFOLD_MAX_RECEIVERS): where a
+    // caustic estimator adds what the path leaves out, with the throughput and direction the
+    // path arrived with.
+    uint receivers;
+    Hit receiver_hit[MANIFOLD_MAX_RECEIVERS];
+    vec3 receiver_beta[MANIFOLD_MAX_RECEIVERS];  // throughput up to it (Russian roulette included)
+    vec3 receiver_wo[MANIFOLD_MAX_RECEIVERS];    // unit direction from it back along the path
 };
 
 // What a path carries from one vertex to the next: the ray to trace, the throughput and what
@@ -87,11 +86,12 @@ PathRadiance path_radiance_none() {
     r.first.t = 0.0;
     r.first.prim = ~0u;
     r.first.bary = vec2(0.0);
-    r.smooth_found = false;
-    r.smooth_hit = r.first;
-    r.smooth_depth = 0u;
-    r.smooth_beta = vec3(0.0);
-    r.smooth_wo = vec3(0.0);
+    r.receivers = 0u;
+    for (uint i = 0u; i < uint(MANIFOLD_MAX_RECEIVERS); ++i) {
+        r.receiver_hit[i] = r.first;
+        r.receiver_beta[i] = vec3(0.0);
+        r.receiver_wo[i] = vec3(0.0);
+    }
     return r;
 }
 
@@ -141,12 +141,12 @@ bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit
     vec3 wo = shading_to_local(sh, -st.d);
     uint flags = bsdf_flags(sh.mat);
     bool has_smooth = (flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
-    if (has_smooth && !r.smooth_found) {
-        r.smooth_found = true;
-        r.smooth_hit = hit;
-        r.smooth_depth = st.depth;
-        r.smooth_beta = st.beta;
-        r.smooth_wo = -st.d;
+    if (manifold_coverage_receiver(st.cov, sh, ps.covered_depth) &&
+        r.receivers < uint(MANIFOLD_MAX_RECEIVERS)) {
+        r.receiver_hit[r.receivers] = hit;
+        r.receiver_beta[r.receivers] = st.beta;
+        r.receiver_wo[r.receivers] = -st.d;
+        ++r.receivers;
     }
 
     // Next-event estimation.
@@ -155,7 +155,7 @@ bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit
         NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic);
 #ifdef MANIFOLD_ROUGH_CASTERS
         if (nee.valid && manifold_coverage_covers_light_sample(
-                             st.cov, sh, st.depth, ps.covered_depth, ps.covered_max_chain, wo,
+                             st.cov, sh, ps.covered_depth, ps.covered_max_chain, wo,
                              shading_to_local(sh, nee.ls.wi), nee.ls.light))
             nee.valid = false;
 #endif
@@ -170,8 +170,7 @@ bool path_vertex(inout PathVertexState st, inout PathRadiance r, bool found, Hit
     vec3 u_bsdf = vec3(rng_next(rng), rng_next2(rng));
     BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
     if (!bsdf_sample_valid(bs)) return false;
-    st.cov = manifold_coverage_step(st.cov, sh, st.depth, ps.covered_depth,
-                                    ps.covered_max_chain, bs.flags);
+    st.cov = manifold_coverage_step(st.cov, sh, ps.covered_depth, ps.covered_max_chain, bs.flags);
     st.beta *= bsdf_sample_weight(bs);
     st.prev_delta = (bs.flags & BSDF_DELTA) != 0u;
     st.prev_pdf = bs.pdf;

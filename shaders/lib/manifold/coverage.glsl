@@ -5,12 +5,14 @@
 // depth 1, which also loses caustics seen from non-receivers.
 //
 // A covered path, from the camera: a receiver vertex x0 (tagged caustic_receiver, not a
-// caster, with a diffuse or glossy lobe) that is the camera path's first vertex with a smooth
-// lobe, at most receiver_depth deep (0: the primary hit; 1: seen through one purely specular
-// surface, e.g. a pool floor under water), then 1..maxChain specular
-// vertices that the walk models (on casters or bouncers, at least one a caster; refraction
-// through smooth dielectrics, reflection off smooth conductors), then an emitter tagged
-// caustic_emitter, reached directly by the last segment.
+// caster or bouncer, with a diffuse or glossy lobe) that is one of the camera path's first
+// MANIFOLD_MAX_RECEIVERS vertices with a smooth lobe (1 unless a pass defines more: SMS at
+// receivers behind diffuse bounces, as the reference integrator runs it at every depth), with
+// at most receiver_depth specular vertices since the camera or the smooth vertex before (0: seen
+// directly; 1: through one purely specular surface, e.g. a pool floor under water), left through
+// a smooth lobe, then 1..maxChain specular vertices that the walk models (on casters or
+// bouncers, at least one a caster; refraction through smooth dielectrics, reflection off smooth
+// conductors), then an emitter tagged caustic_emitter, reached directly by the last segment.
 #ifndef LOOM_MANIFOLD_COVERAGE_GLSL
 #define LOOM_MANIFOLD_COVERAGE_GLSL
 
@@ -18,6 +20,10 @@
 #include "lib/lights.glsl"
 #include "lib/manifold/walk.glsl"
 #include "lib/shading.glsl"
+
+#ifndef MANIFOLD_MAX_RECEIVERS
+#define MANIFOLD_MAX_RECEIVERS 1
+#endif
 
 bool manifold_receiver(uint shape_flags, Material m) {
     return (shape_flags & SHAPE_CAUSTIC_RECEIVER) != 0u &&
@@ -55,12 +61,14 @@ bool manifold_light_is_environment(uint light) {
     return light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT);
 }
 
-// Tracks, along a camera path, whether the vertices since the receiver form a covered chain.
+// Tracks, along a camera path, which vertices are receivers and whether the vertices since the
+// last receiver form a covered chain.
 struct ManifoldCoverage {
     uint chain_length;  // specular chain vertices since the receiver
-    bool open;          // the path so far is receiver (+ chain): still a covered prefix
+    bool open;          // the path since the receiver is receiver (+ chain): a covered prefix
     bool caster;        // the chain has a caster vertex
-    bool prefix;        // every vertex so far was purely specular (no smooth lobe)
+    uint smooth_count;  // vertices with a smooth lobe so far
+    uint run;           // vertices without one since the camera or the last smooth vertex
 };
 
 ManifoldCoverage manifold_coverage_none() {
@@ -68,33 +76,44 @@ ManifoldCoverage manifold_coverage_none() {
     c.chain_length = 0u;
     c.open = false;
     c.caster = false;
-    c.prefix = true;
+    c.smooth_count = 0u;
+    c.run = 0u;
     return c;
 }
 
-// At a path vertex sh (path depth `depth`) that scatters with sample flags `sample_flags`:
-// opens the chain at the receiver (the first vertex with a smooth lobe, if it is a receiver
-// at most receiver_depth deep), extends or closes it elsewhere.
-ManifoldCoverage manifold_coverage_step(ManifoldCoverage c, ShadingPoint sh, uint depth,
-                                        uint receiver_depth, uint max_chain, uint sample_flags) {
-    if (max_chain == 0u) return manifold_coverage_none();
-    if (c.prefix) {
-        bool smooth_lobe = (bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u;
-        if (!smooth_lobe) return c;  // still the camera's specular prefix
-        c.prefix = false;
-        // SMS evaluates the receiver's smooth lobes only: a delta lobe (a plastic's coat)
-        // leaving it starts no covered path.
-        c.open = depth <= receiver_depth && manifold_receiver(sh.shape_flags, sh.mat) &&
-                 (sample_flags & BSDF_DELTA) == 0u;
-        c.chain_length = 0u;
-        c.caster = false;
+// Whether path vertex sh, reached after c, is a receiver: a caustic estimator runs there, and
+// the paths it produces leave through it. Independent of the lobe the path samples there.
+bool manifold_coverage_receiver(ManifoldCoverage c, ShadingPoint sh, uint receiver_depth) {
+    return c.smooth_count < uint(MANIFOLD_MAX_RECEIVERS) && c.run <= receiver_depth &&
+           (sh.shape_flags & SHAPE_CAUSTIC_BOUNCER) == 0u &&
+           manifold_receiver(sh.shape_flags, sh.mat);
+}
+
+// At a path vertex sh that scatters with sample flags `sample_flags`: extends an open chain
+// (a chain surface scattering as the walk does), else opens one at a receiver, else closes it.
+// max_chain = 0: no paths are covered (the receivers are still counted).
+ManifoldCoverage manifold_coverage_step(ManifoldCoverage c, ShadingPoint sh, uint receiver_depth,
+                                        uint max_chain, uint sample_flags) {
+    bool receiver = manifold_coverage_receiver(c, sh, receiver_depth);
+    bool extends = c.open && c.chain_length < max_chain &&
+                   manifold_chain_surface(sh.shape_flags, sh.mat) &&
+                   manifold_chain_lobe(sh.mat, sample_flags);
+    if ((bsdf_flags(sh.mat) & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u) {
+        c.smooth_count += 1u;
+        c.run = 0u;
+    } else {
+        c.run += 1u;
+    }
+    if (extends) {
+        c.caster = c.caster || (sh.shape_flags & SHAPE_CAUSTIC_CASTER) != 0u;
+        c.chain_length += 1u;
         return c;
     }
-    if (!c.open) return c;
-    c.open = c.chain_length < max_chain && manifold_chain_surface(sh.shape_flags, sh.mat) &&
-             manifold_chain_lobe(sh.mat, sample_flags);
-    c.caster = c.caster || (sh.shape_flags & SHAPE_CAUSTIC_CASTER) != 0u;
-    c.chain_length += 1u;
+    // SMS evaluates the receiver's smooth lobes only: a delta lobe (a plastic's coat) leaving
+    // it starts no covered path.
+    c.open = max_chain > 0u && receiver && (sample_flags & BSDF_DELTA) == 0u;
+    c.chain_length = 0u;
+    c.caster = false;
     return c;
 }
 
@@ -117,18 +136,18 @@ bool manifold_coverage_covers_miss(ManifoldCoverage c) {
 #endif
 }
 
-// Whether a light sample taken at sh (path depth `depth`, after c) towards light `light`
+// Whether a light sample taken at sh (after c) towards light `light`
 // closes a covered path: at a rough chain vertex the path tracer's light sample reaches the
 // emitter as its BSDF sample does, so both leave the covered paths out (wo, wi: local
 // directions of the vertex). Smooth chains have no light samples on their vertices.
-bool manifold_coverage_covers_light_sample(ManifoldCoverage c, ShadingPoint sh, uint depth,
+bool manifold_coverage_covers_light_sample(ManifoldCoverage c, ShadingPoint sh,
                                            uint receiver_depth, uint max_chain, vec3 wo,
                                            vec3 wi, uint light) {
 #if defined(MANIFOLD_ROUGH_CASTERS) && !defined(LOOM_TEST_ROUGH_LIGHT_SAMPLES_KEPT)
     // (LOOM_TEST_ROUGH_LIGHT_SAMPLES_KEPT: the double counting the SMS tests must detect.)
     if (!c.open) return false;
     uint lobe = BSDF_GLOSSY | (wo.z * wi.z > 0.0 ? BSDF_REFLECTION : BSDF_TRANSMISSION);
-    ManifoldCoverage next = manifold_coverage_step(c, sh, depth, receiver_depth, max_chain, lobe);
+    ManifoldCoverage next = manifold_coverage_step(c, sh, receiver_depth, max_chain, lobe);
 #ifndef MANIFOLD_ENVIRONMENT_CHAINS
     if (manifold_light_is_environment(light)) return false;
 #endif

@@ -148,8 +148,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
         // BSDF sampling towards x_{j+1}.
         BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf);
         if (!bsdf_sample_valid(bs)) break;
-        cov = manifold_coverage_step(cov, sh, j - 1u, cfg.covered_depth, cfg.covered_max_chain,
-                                     bs.flags);
+        cov = manifold_coverage_step(cov, sh, cfg.covered_depth, cfg.covered_max_chain, bs.flags);
         bool delta = (bs.flags & BSDF_DELTA) != 0u;
         vec3 beta_next = beta * bsdf_sample_weight(bs);
         if (g.k != 0u && j >= rr_depth) {

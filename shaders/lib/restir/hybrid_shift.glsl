@@ -210,8 +210,8 @@ vec3 restir_shift_with_density(RestirSettings cfg, PathSample s, PrimaryHit dst,
             // Replay the BSDF sample of x_j towards y_{j+1}.
             bs = bsdf_sample(sh.mat, wo, u_bsdf);
             if (!bsdf_sample_valid(bs)) break;
-            cov = manifold_coverage_step(cov, sh, j - 1u, cfg.covered_depth,
-                                         cfg.covered_max_chain, bs.flags);
+            cov = manifold_coverage_step(cov, sh, cfg.covered_depth, cfg.covered_max_chain,
+                                         bs.flags);
             ray_d = shading_to_world(sh, bs.wi);
             ray_o = offset_ray_origin(sh.sp.p, sh.sp.ng, ray_d);
         }
