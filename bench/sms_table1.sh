@@ -9,8 +9,10 @@
 #
 #   bash bench/sms_table1.sh                          # 256x256, Table 1 only
 #   EQUAL_TIME=1 WIDTH=64 HEIGHT=64 BUDGET_MS=4000 bash bench/sms_table1.sh
-#   (also sms-sphere and sms-plane at SHARED_WIDTH x SHARED_HEIGHT, 64 x 36, against 1024 and
-#   256 frames of unbiased SMS (SHARED_REF_FRAMES), when ../shared/scenes is present)
+#   (also sms-sphere, sms-plane and sms-pool-lite at SHARED_WIDTH x SHARED_HEIGHT, 64 x 36,
+#   against 1024, 256 and 1024 frames of unbiased SMS (SHARED_REF_FRAMES), when ../shared/scenes
+#   is present; SMS at two and three receivers per path on scenes/curved_mirror_wall.json; the
+#   wavy slab under a light of the paper's size against 512 frames of unbiased SMS)
 #
 # Scenes: the project's glass sphere, curved mirror, wavy slab (both faces wavy), the slab with
 # a flat bottom (scenes/refractive_caustic.json) and the normal-mapped water surface, and, when
@@ -73,4 +75,16 @@ if [ "${EQUAL_TIME:-0}" = 1 ]; then
             ref_graph=graphs/sms.json ref_frames="${SHARED_REF_FRAMES:-$2}" mask_frames=16 \
             scenes="../shared/scenes/$1" out="out/sms_equal_time_shared/${1%%/*}"
     done
+    # SMS at receivers behind a diffuse bounce (maxReceivers): the wall lit through the floor's
+    # caustic, caustic region from two receivers per path.
+    "$LOOM" run scripts/sms_equal_time.lua configs=bench/data/sms_receivers_configs.json \
+        scenes=scenes/curved_mirror_wall.json width="$W" height="$H" budget_ms="${BUDGET_MS:-8000}" \
+        steps=4 ref_frames="${REF_FRAMES:-64}" ref_spp="${REF_SPP:-64}" mask_receivers=2 \
+        out=out/sms_receivers
+    # The project's wavy slab under a light of the paper's size (the path tracer cannot render
+    # its reference either).
+    "$LOOM" run scripts/sms_equal_time.lua configs=bench/data/sms_configs.json \
+        scenes=scenes/wavy_slab_small_light.json width="$W" height="$H" \
+        budget_ms="${BUDGET_MS:-8000}" steps=4 ref_graph=graphs/sms.json \
+        ref_frames="${SLAB_REF_FRAMES:-512}" mask_frames=16 out=out/sms_equal_time_small_light
 fi

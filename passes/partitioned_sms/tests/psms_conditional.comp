@@ -46,7 +46,7 @@ void main() {
     ms.solver_threshold = cfg(7).w;
     ms.min_segment = 1e-4;
     ms.step_control = MANIFOLD_STEP_REPROJECTION;
-    ms.max_chain = 1u;
+    ms.max_chain = max(uint(cfg(6).x), 1u);
     ManifoldSeedSpace space = manifold_seed_space(x0, ng0, cfg(4));
     vec3 target = cfg(5).xyz;
     uint shape = uint(cfg(5).w);

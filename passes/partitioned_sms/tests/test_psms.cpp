@@ -105,14 +105,15 @@ std::vector<glm::vec3> gridSolutions(const std::vector<glm::vec4>& grid) {
 // target's first direction, and the tile set as 32 mask rows of #I tiles.
 std::vector<glm::vec4> conditionalConfig(glm::vec3 x0, glm::vec3 light, glm::vec4 bound,
                                          uint32_t caster, int tiles, int mode, glm::vec3 target,
-                                         uint32_t setSize, const std::vector<uint32_t>& rows) {
+                                         uint32_t setSize, const std::vector<uint32_t>& rows,
+                                         int maxChain = 1) {
     std::vector<glm::vec4> c = {glm::vec4(x0, mode),
                                 glm::vec4(0, 1, 0, tiles),
                                 glm::vec4(light, 0.8f),
                                 glm::vec4(0, 1, 0, 20),
                                 bound,
                                 glm::vec4(target, float(caster)),
-                                glm::vec4(1, 0, 0, float(setSize)),
+                                glm::vec4(float(maxChain), 0, 0, float(setSize)),
                                 glm::vec4(0, 0, 1, 1e-5f)};
     for (int r = 0; r < 32; ++r)
         c.push_back(glm::vec4(float(rows[r] & 0xFFFFu), float(rows[r] >> 16), 0, 0));
@@ -126,10 +127,10 @@ std::vector<glm::vec4> conditionalConfig(glm::vec3 x0, glm::vec3 light, glm::vec
 // reach x*, less one, plus two far tiles.
 void checkConditional(const scene::Scene& scene, uint32_t caster, glm::vec3 x0, glm::vec3 light,
                       glm::vec4 bound, int tiles, bool prior, glm::vec3 target,
-                      uint32_t gridSize = 256) {
+                      uint32_t gridSize = 256, int maxChain = 1) {
     constexpr uint32_t kDraws = 128;
     auto config = [&](int mode, glm::vec3 t, uint32_t setSize, const std::vector<uint32_t>& rows) {
-        return conditionalConfig(x0, light, bound, caster, tiles, mode, t, setSize, rows);
+        return conditionalConfig(x0, light, bound, caster, tiles, mode, t, setSize, rows, maxChain);
     };
     std::vector<uint32_t> none(32, 0u);
     // The grid with no tile set: which seeds reach which solution.
@@ -256,6 +257,28 @@ TEST(PartitionedSMS, TrialWeightPerSolutionWithSeveralSolutions) {
     for (size_t k = 0; k < std::min<size_t>(solutions.size(), 2); ++k)
         for (bool prior : {false, true})
             checkConditional(scene, mirror, x0, light, bound, 16, prior, solutions[k], grid);
+}
+
+// Two-vertex chains: every solution of a floor point that sees the light through the glass
+// sphere's two refractions (three solutions at (-0.2, 0, 0.1)), N = 16, with and without a tile
+// set (with one, a P(C) without the prior's term must be seen). The
+// trust region bounds the walk's first vertex only; the conditional weight must hold per
+// solution all the same. (The glass sphere's caustic reading low against SMS, issue 16, is
+// therefore not a wrong K / P(C) at such points.)
+TEST(PartitionedSMS, TrialWeightPerSolutionThroughTwoRefractions) {
+    auto scene = scene::loadScene(sourcePath("scenes/glass_sphere.json"));
+    const glm::vec3 x0(-0.2f, 0.0f, 0.1f), light(0.6f, 3.0f, -0.3f);
+    const glm::vec4 bound(0.0f, 0.6f, 0.0f, 0.505f);
+    uint32_t sphere = shapeIndex(scene, "sphere");
+    auto solutions = gridSolutions(
+        runConditional(scene, 256,
+                       conditionalConfig(x0, light, bound, sphere, 16, 0, glm::vec3(0), 0,
+                                         std::vector<uint32_t>(32, 0u), 2)));
+    std::printf("%zu solutions\n", solutions.size());
+    ASSERT_GE(solutions.size(), 2u);
+    for (const glm::vec3& target : solutions)
+        for (bool prior : {false, true})
+            checkConditional(scene, sphere, x0, light, bound, 16, prior, target, 256, 2);
 }
 
 // ManifoldPrior's tile sets against an independent seed map. A flat mirror (y = 2, facing down)
