@@ -10,7 +10,8 @@
 -- light is a large part of the pixel.
 -- Each configuration renders until its summed GPU frame times reach budget_ms * 2^(k - steps),
 -- k = 1..steps (r:run_for_ms); at each step: relMSE over the image and over the caustic region
--- (loom.metrics' relMSE, eps 0.01). The last step gives:
+-- (loom.metrics' relMSE, eps 0.01) and the RMSE over the caustic region (RGB). The last step
+-- gives:
 --   - ratio: PT's caustic-region relMSE over this configuration's at equal time (relMSE times
 --     GPU ms, since relMSE ~ 1 / time for these consistent estimators and the frame counts
 --     miss the budget by up to a frame);
@@ -58,10 +59,10 @@ local function pixel_relmse(img, ref, x, y)
           + (a3 - b3) ^ 2 / (b3 ^ 2 + 0.01)) / 3
 end
 
--- Errors of img against ref: relMSE inside the mask, luminance ratio inside the mask, and the
--- luminance ratio per block.
+-- Errors of img against ref: relMSE and RMSE inside the mask, luminance ratio inside the mask,
+-- and the luminance ratio per block.
 local function measure(img, ref, mask)
-  local err, n, sum, sum_ref = 0, 0, 0, 0
+  local err, sq, n, sum, sum_ref = 0, 0, 0, 0, 0
   local block, block_ref = {}, {}
   for i = 1, regions * regions do block[i], block_ref[i] = 0, 0 end
   for y = 0, height - 1 do
@@ -71,6 +72,9 @@ local function measure(img, ref, mask)
       block[b], block_ref[b] = block[b] + l, block_ref[b] + lr
       if mask[y * width + x + 1] then
         err, n = err + pixel_relmse(img, ref, x, y), n + 1
+        local a1, a2, a3 = img:get(x, y)
+        local b1, b2, b3 = ref:get(x, y)
+        sq = sq + ((a1 - b1) ^ 2 + (a2 - b2) ^ 2 + (a3 - b3) ^ 2) / 3
         sum, sum_ref = sum + l, sum_ref + lr
       end
     end
@@ -83,7 +87,8 @@ local function measure(img, ref, mask)
       ratios[i] = block[i] / block_ref[i]
     end
   end
-  return {relmse = n > 0 and err / n or 0, energy = sum_ref > 0 and sum / sum_ref or 1,
+  return {relmse = n > 0 and err / n or 0, rmse = n > 0 and math.sqrt(sq / n) or 0,
+          energy = sum_ref > 0 and sum / sum_ref or 1,
           blocks = ratios, pixels = n}
 end
 
@@ -148,7 +153,7 @@ for _, scene_arg in ipairs(scenes) do
         rows[#rows + 1] = {index = #rows + 1, scene = name, config = cfg.name, budget_ms = target,
                            gpu_ms = spent, frames = frames,
                            relmse = loom.metrics.relmse(img, ref), relmse_caustic = last.relmse,
-                           energy_caustic = last.energy}
+                           rmse_caustic = last.rmse, energy_caustic = last.energy}
         xs[k], ys[k] = spent, last.relmse
       end
       series[c] = {name = cfg.name, x = xs, y = ys}
@@ -161,8 +166,8 @@ for _, scene_arg in ipairs(scenes) do
       end
       local row = {scene = name, config = cfg.name, frames = frames, gpu_ms = spent,
                    ms_per_frame = spent / frames, relmse = rows[#rows].relmse,
-                   relmse_caustic = last.relmse, energy_caustic = last.energy,
-                   worst_block = worst}
+                   relmse_caustic = last.relmse, rmse_caustic = last.rmse,
+                   energy_caustic = last.energy, worst_block = worst}
       if per_frame > 0 then
         -- Frame per_frame's own image in fresh sequences (accumulation differences).
         local err, ms = 0, 0
@@ -217,6 +222,7 @@ util.print_table({{key = "scene"}, {key = "config"}, {key = "frames"},
                   {key = "ms_per_frame", title = "ms/frame", fmt = "%.1f"},
                   {key = "relmse", title = "relMSE", fmt = "%.4g"},
                   {key = "relmse_caustic", title = "relMSE caustic", fmt = "%.4g"},
+                  {key = "rmse_caustic", title = "RMSE caustic", fmt = "%.4g"},
                   {key = "ratio", title = "ratio vs PT", fmt = "%.2f"},
                   {key = "energy_caustic", title = "energy caustic", fmt = "%.3f"},
                   {key = "worst_block", title = "worst block", fmt = "%.3f"}}, summary)
