@@ -25,7 +25,8 @@ layout(local_size_x = WORK_LIST_GROUP) in;
 struct WavefrontPath {
     vec4 o;         // w: depth (bits)
     vec4 d;         // w: prev_pdf
-    vec4 beta;      // w: flags (bits, PT_FLAG_*) | coverage chain length << 8
+    vec4 beta;      // w: flags (bits, PT_FLAG_*) | coverage: chain length << 8, smooth
+                    // vertices << 16, specular run << 24
     vec4 prev_p;    // w: rays of this chunk (bits)
     vec4 L;         // w: given first hit: prim (bits)
     vec4 L_direct;  // w: given first hit: bary.x
@@ -48,7 +49,7 @@ layout(std430) buffer WavefrontShadows {
 };
 
 const uint PT_FLAG_PREV_DELTA = 1u, PT_FLAG_COV_OPEN = 2u, PT_FLAG_COV_CASTER = 4u,
-           PT_FLAG_COV_PREFIX = 8u, PT_FLAG_GIVEN = 16u, PT_FLAG_FIRST_FOUND = 32u;
+           PT_FLAG_GIVEN = 16u, PT_FLAG_FIRST_FOUND = 32u;
 
 uint pixel_count() { return pc.frameSize.x * pc.frameSize.y; }
 
@@ -63,8 +64,9 @@ void load_path(uint i, out PathVertexState st, out PathRadiance r, out Rng rng, 
     st.prev_delta = (flags & PT_FLAG_PREV_DELTA) != 0u;
     st.cov.open = (flags & PT_FLAG_COV_OPEN) != 0u;
     st.cov.caster = (flags & PT_FLAG_COV_CASTER) != 0u;
-    st.cov.prefix = (flags & PT_FLAG_COV_PREFIX) != 0u;
-    st.cov.chain_length = flags >> 8u;
+    st.cov.chain_length = (flags >> 8u) & 0xFFu;
+    st.cov.smooth_count = (flags >> 16u) & 0xFFu;
+    st.cov.run = flags >> 24u;
     st.prev_p = paths[i].prev_p.xyz;
     r = path_radiance_none();
     r.rays = floatBitsToUint(paths[i].prev_p.w);
@@ -80,8 +82,9 @@ void store_path(uint i, PathVertexState st, PathRadiance r, Rng rng, uint keep_f
     if (st.prev_delta) flags |= PT_FLAG_PREV_DELTA;
     if (st.cov.open) flags |= PT_FLAG_COV_OPEN;
     if (st.cov.caster) flags |= PT_FLAG_COV_CASTER;
-    if (st.cov.prefix) flags |= PT_FLAG_COV_PREFIX;
-    flags |= st.cov.chain_length << 8u;
+    flags |= min(st.cov.chain_length, 255u) << 8u;
+    flags |= min(st.cov.smooth_count, 255u) << 16u;
+    flags |= min(st.cov.run, 255u) << 24u;
     paths[i].o = vec4(st.o, uintBitsToFloat(st.depth));
     paths[i].d = vec4(st.d, st.prev_pdf);
     paths[i].beta = vec4(st.beta, uintBitsToFloat(flags));
