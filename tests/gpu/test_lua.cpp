@@ -886,12 +886,12 @@ TEST(LoomRun, SmsEqualTimeScript) {
                      tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     for (const char* s : {"skipping no/such.json", "caustic region", "SMS unbiased", "MNEE",
-                          "relMSE caustic", "ratio vs PT", "energy caustic"})
+                          "relMSE caustic", "RMSE caustic", "ratio vs PT", "energy caustic"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
     script::CsvTable csv = script::readCsv(tmp / "se/sms_equal_time.csv");
-    EXPECT_EQ(csv.header,
-              (std::vector<std::string>{"scene", "config", "budget_ms", "gpu_ms", "frames", "index",
-                                        "energy_caustic", "relmse", "relmse_caustic"}));
+    EXPECT_EQ(csv.header, (std::vector<std::string>{"scene", "config", "budget_ms", "gpu_ms",
+                                                    "frames", "index", "energy_caustic", "relmse",
+                                                    "relmse_caustic", "rmse_caustic"}));
     ASSERT_EQ(csv.rows.size(), 12u);  // 6 configurations x 2 budget steps
     for (auto& row : csv.rows) EXPECT_GE(std::stod(row[3]), std::stod(row[2])) << "budget met";
     EXPECT_EQ(script::readCsv(tmp / "se/sms_regions.csv").rows.size(), 24u);  // 6 x 2 x 2
