@@ -877,6 +877,35 @@ TEST(LoomRun, ReSTIREqualTimeScript) {
         EXPECT_TRUE(fs::exists(tmp / f)) << f;
 }
 
+TEST(LoomRun, TailDiagnosticsScript) {
+    // Per-frame tail statistics of psms's caustic: one CSV row per report, running counts that
+    // add up, and a pass parameter given as PASS.PARAM=VALUE reaching the renderer.
+    TempDir tmp("loom-run");
+    auto r = runLoom("run " + script("tail_diagnostics.lua") +
+                         " size=8 frames=6 every=3 psms.maxTrials=64 out=td",
+                     tmp);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("top 1%"), std::string::npos) << r.out;
+    script::CsvTable csv = script::readCsv(tmp / "td/tail.csv");
+    ASSERT_GE(csv.header.size(), 7u);
+    EXPECT_EQ(csv.header[0], "frames");
+    EXPECT_EQ(csv.header[6], "top1_share");
+    ASSERT_EQ(csv.rows.size(), 2u);
+    EXPECT_EQ(csv.rows[0][0], "3");
+    EXPECT_EQ(csv.rows[1][0], "6");
+    for (auto& row : csv.rows) {
+        EXPECT_GE(std::stod(row[1]), 0.0) << "mean";
+        double nz = std::stod(row[3]), share = std::stod(row[6]);
+        EXPECT_GE(nz, 0.0);
+        EXPECT_LE(nz, 1.0);
+        EXPECT_GE(share, 0.0);
+        EXPECT_LE(share, 1.0);
+    }
+    r = runLoom("run " + script("tail_diagnostics.lua") + " size=8 frames=1 psms.noSuch=1", tmp);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("noSuch"), std::string::npos) << r.err;
+}
+
 TEST(LoomRun, SmsEqualTimeScript) {
     TempDir tmp("loom-run");
     auto r = runLoom("run " + script("sms_equal_time.lua") +
