@@ -7,7 +7,7 @@
 -- errors cannot be trusted (passes/partitioned_sms/README.md, "the glass sphere").
 --
 --   loom run scripts/tail_diagnostics.lua graph=graphs/psms.json port=psms.caustic \
---       scene=scenes/glass_sphere.json size=32 frames=2000 every=100 \
+--       scene=scenes/glass_sphere.json size=32 frames=2000 every=100 [region=0,0,16,16] \
 --       psms.maxTrials=1000000 prior.presamples=1024 out=out/tail
 -- (every PASS.PARAM=VALUE argument is set on the renderer). Writes OUT/tail.csv.
 local util = require("util")
@@ -20,12 +20,20 @@ local frames = loom.arg("frames", 1000)
 local every = loom.arg("every", 100)
 local seed = loom.arg("seed", 5)
 local out = loom.arg("out", "out/tail")
+-- region=x,y,w,h: the statistics of that pixel rectangle only (default: the whole image).
+local region = loom.arg("region", {0, 0, size, size})
+if #region ~= 4 or region[3] < 1 or region[4] < 1 or region[1] < 0 or region[2] < 0 or
+    region[1] + region[3] > size or region[2] + region[4] > size then
+    error(string.format("region: x,y,w,h inside the %dx%d image", size, size))
+end
+local x0, y0, w, h = region[1], region[2], region[3], region[4]
 
 local r = loom.renderer{graph = graph, scene = scene, width = size, height = size, seed = seed}
 util.apply_param_args(r)
 r:mark_output(port)
 local rows = {}
-print(string.format("%s %s on %s, %dx%d, seed %d", graph, port, scene, size, size, seed))
+print(string.format("%s %s on %s, %dx%d, seed %d, region %d,%d %dx%d", graph, port, scene, size,
+                    size, seed, x0, y0, w, h))
 print(string.format("%8s %12s %12s %9s %12s %10s %6s", "frames", "mean", "s.e.", "nonzero",
                     "mean nonzero", "max", "top 1%"))
 local sum, sum2, nonzero, maxv, values = 0, 0, 0, 0, {}
@@ -33,8 +41,8 @@ for f = 1, frames do
     r:frame()
     local img = r:image(port)
     local m = 0
-    for y = 0, size - 1 do
-        for x = 0, size - 1 do
+    for y = y0, y0 + h - 1 do
+        for x = x0, x0 + w - 1 do
             local a, b, c = img:get(x, y)
             local v = (a + b + c) / 3
             if v ~= v then error(string.format("frame %d: pixel (%d, %d) is NaN", f, x, y)) end
@@ -46,7 +54,7 @@ for f = 1, frames do
             m = m + v
         end
     end
-    m = m / (size * size)
+    m = m / (w * h)
     sum, sum2 = sum + m, sum2 + m * m
     if f % every == 0 or f == frames then
         local mean = sum / f
@@ -56,7 +64,7 @@ for f = 1, frames do
         local k = math.max(1, math.floor(#values / 100))
         for i = 1, #values do total = total + values[i] end
         for i = math.max(1, #values - k + 1), #values do top = top + values[i] end
-        local nzf = nonzero / (f * size * size)
+        local nzf = nonzero / (f * w * h)
         local meanNz = #values > 0 and total / #values or 0
         local share = total > 0 and top / total or 0
         print(string.format("%8d %12.6g %12.6g %9.5f %12.6g %10.4g %6.3f", f, mean, se, nzf,

@@ -882,7 +882,7 @@ TEST(LoomRun, TailDiagnosticsScript) {
     // add up, and a pass parameter given as PASS.PARAM=VALUE reaching the renderer.
     TempDir tmp("loom-run");
     auto r = runLoom("run " + script("tail_diagnostics.lua") +
-                         " size=8 frames=6 every=3 psms.maxTrials=64 out=td",
+                         " size=8 frames=6 every=3 region=0,0,4,8 psms.maxTrials=64 out=td",
                      tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("top 1%"), std::string::npos) << r.out;
@@ -901,9 +901,13 @@ TEST(LoomRun, TailDiagnosticsScript) {
         EXPECT_GE(share, 0.0);
         EXPECT_LE(share, 1.0);
     }
+    EXPECT_NE(r.out.find("region 0,0 4x8"), std::string::npos) << r.out;
     r = runLoom("run " + script("tail_diagnostics.lua") + " size=8 frames=1 psms.noSuch=1", tmp);
     EXPECT_EQ(r.exitCode, 2);
     EXPECT_NE(r.err.find("noSuch"), std::string::npos) << r.err;
+    r = runLoom("run " + script("tail_diagnostics.lua") + " size=8 frames=1 region=4,0,8,8", tmp);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("region: x,y,w,h inside the 8x8 image"), std::string::npos) << r.err;
 }
 
 TEST(LoomRun, SmsEqualTimeScript) {
