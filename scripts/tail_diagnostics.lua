@@ -1,6 +1,6 @@
 -- Heavy-tail diagnostics of one estimator's per-frame image: renders `frames` independent 1 spp
 -- frames of `port` (not accumulated) and reports, every `every` frames, the running mean over
--- the image (luminance, mean of RGB) with its standard error over frames, the fraction of
+-- the image (of each pixel's mean of RGB) with its standard error over frames, the fraction of
 -- nonzero pixel samples, the mean of the nonzero ones, the largest pixel sample and the share
 -- of the total carried by the largest 1 % of nonzero samples. A running mean that jumps when a
 -- new maximum arrives, with a top-1 % share near 1, is an estimator whose frame-count standard
