@@ -7,7 +7,7 @@ function util.parse_list(text)
   local values = {}
   for item in text:gmatch("[^,]+") do
     local ok, v = pcall(loom.json_decode, item)
-    values[#values + 1] = ok and v or item
+    if ok then values[#values + 1] = v else values[#values + 1] = item end  -- keeps `false`
   end
   return values
 end
@@ -21,7 +21,8 @@ function util.apply_param_args(r)
   table.sort(keys)
   for _, k in ipairs(keys) do
     local ok, value = pcall(loom.json_decode, loom.args[k])
-    r:set(k, ok and value or loom.args[k])
+    if not ok then value = loom.args[k] end  -- not `ok and value or ...`: that turns false into "false"
+    r:set(k, value)
   end
 end
 

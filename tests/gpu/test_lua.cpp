@@ -882,7 +882,8 @@ TEST(LoomRun, TailDiagnosticsScript) {
     // add up, and a pass parameter given as PASS.PARAM=VALUE reaching the renderer.
     TempDir tmp("loom-run");
     auto r = runLoom("run " + script("tail_diagnostics.lua") +
-                         " size=8 frames=6 every=3 region=0,0,4,8 psms.maxTrials=64 out=td",
+                         " size=8 frames=6 every=3 region=0,0,4,8 psms.maxTrials=64 "
+                         "psms.prior=false out=td",
                      tmp);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("top 1%"), std::string::npos) << r.out;
