@@ -32,29 +32,40 @@ void main() {
         ss.uniqueness_threshold = 1e-5;
         ss.geometric_clamp = 0.0;
         ss.bijective = true;
-        ManifoldSample t;
-        vec3 F;
-        out_value.x = -1.0;
-        if (manifold_shift(rc.s, rc.receiver, false, rc.receiver, false, ss, t, F)) {
-            out_value.x = length(t.x1.xyz - rc.s.x1.xyz);
-            out_value.y = length(F - rc.F.rgb) / length(rc.F.rgb);
-        }
+        // Job 0: the shift to its own pixel; jobs 1 and 3: c -> q with the walk back on and
+        // off; jobs 2 and 4: back to c. One manifold_shift call site: lavapipe compiles every
+        // inlined walk separately, and three call sites tripled this kernel's compile time.
         uvec2 q = pixel + uvec2(5u, 2u);
-        if (all(lessThan(q, pc.frameSize))) {
-            ManifoldReservoir rq = reservoirs_in[q.y * pc.frameSize.x + q.x];
-            for (uint b = 0u; b < 2u && primary_valid(rq.receiver); ++b) {
-                ss.bijective = b == 0u;
-                float r = -1.0;
-                ManifoldSample back;
-                if (manifold_shift(rc.s, rc.receiver, false, rq.receiver, false, ss, t, F)) {
-                    r = -2.0;
-                    if (manifold_shift(t, rq.receiver, false, rc.receiver, false, ss, back, F))
-                        r = length(back.x1.xyz - rc.s.x1.xyz);
-                }
-                if (b == 0u) out_value.z = r;
-                else out_value.w = r;
+        ManifoldReservoir rq;
+        bool has_q = all(lessThan(q, pc.frameSize));
+        if (has_q) {
+            rq = reservoirs_in[q.y * pc.frameSize.x + q.x];
+            has_q = primary_valid(rq.receiver);
+        }
+        float r[2] = float[2](-3.0, -3.0);
+        ManifoldSample forward = rc.s;
+        for (uint job = 0u; job < (has_q ? 5u : 1u); ++job) {
+            bool back = job != 0u && job % 2u == 0u;
+            uint b = job == 0u ? 0u : (job - 1u) / 2u;
+            if (back && r[b] != -2.0) continue;  // the forward shift failed
+            ss.bijective = b == 0u;
+            ManifoldSample t;
+            vec3 F;
+            bool ok = manifold_shift(back ? forward : rc.s, back ? rq.receiver : rc.receiver,
+                                     false, (job == 0u || back) ? rc.receiver : rq.receiver,
+                                     false, ss, t, F);
+            if (job == 0u) {
+                out_value.x = ok ? length(t.x1.xyz - rc.s.x1.xyz) : -1.0;
+                if (ok) out_value.y = length(F - rc.F.rgb) / length(rc.F.rgb);
+            } else if (!back) {
+                r[b] = ok ? -2.0 : -1.0;
+                forward = t;
+            } else if (ok) {
+                r[b] = length(t.x1.xyz - rc.s.x1.xyz);
             }
         }
+        out_value.z = r[0];
+        out_value.w = r[1];
     }
     imageStore(outputImage, ivec2(pixel), out_value);
 }
