@@ -2,15 +2,19 @@
 // passes/partitioned_sms/ManifoldReuse.cpp, shaders/lib/manifold/shift.glsl): the shift to
 // its own pixel reproduces the sample, T^-1(T(x)) = x for accepted shifts, and psms with
 // temporal and spatial reuse (static and moving camera) matches the reference path tracer and
-// unbiased SMS. The walk-back ablation (bijectivity off) is not yet shown to fail (below).
+// unbiased SMS. Without the walk back the shift test fails; in the image its effect is below
+// detection (the paired experiment at the end).
 // Frames of one reuse sequence are correlated: the independent unit is a sequence (history
 // reset, new seed), and its mean image is one sample (tests/support/ReuseComparison.h).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 
 #include "core/graph/Renderer.h"
+#include "core/image/Image.h"
 #include "core/scene/SceneLoader.h"
 #include "tests/support/GpuSupport.h"
 #include "tests/support/RegionStats.h"
@@ -240,26 +244,164 @@ TEST(ManifoldReSTIR, TemporalOnlyUnbiasedOnTheCurvedMirrorMovingCamera) {
     EXPECT_LT(a.zSms, 3.0);
 }
 
-// Disabled (open, issue 16): the walk-back ablation is not yet shown to be detected. On the bumpy
-// mirror (a floor point sees the light through several reflection points) both variants read the
-// same, and both low: 16 static sequences, region 0 caustic 0.0106 (walk back on) and 0.0107
-// (off) against SMS 0.0150 +- 0.0007 (|z| 3.65 and 3.27), so shifts that the walk back rejects
-// are rare there. psms alone agrees with SMS in region 0 (2100 / 700 frames: 0.0137 +- 0.0006
-// against 0.0132 +- 0.0004, a moderate tail; README), so the low reading with reuse is open.
-// Run with --gtest_also_run_disabled_tests.
+// Paired difference of two settings of one graph: per sequence (the same seeds for both, so
+// both draw the same initial samples and differ only where the settings change a decision) the
+// mean caustic luminance of `b` minus that of `a`, per pixel. E[b - a] != 0 means the two
+// settings estimate different things: if `a` is unbiased (its own test), `b` is biased. The
+// pairing cancels most of the caustic's variance, which unpaired comparisons with SMS cannot.
+struct PairedSequences {
+    std::vector<std::vector<double>> diff;  // [sequence][pixel]
+    RegionStats a{2};                       // `a` alone, 2 x 2 regions
+};
+PairedSequences pairedDifference(const std::string& sceneFile, const std::string& graphFile,
+                                 const std::string& port, const json& a, const json& b, float dt,
+                                 int sequences) {
+    auto scene = scene::loadScene(sceneFile[0] == '/' ? sceneFile : sourcePath(sceneFile));
+    json base = {
+        {"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}, {"prior.presamples", 1024}};
+    auto make = [&](const json& o) {
+        json all = base;
+        for (auto& [k, v] : o.items()) all[k] = v;
+        auto r = std::make_unique<Renderer>(test::gpuContext(), loadGraph(graphFile, all), kSize,
+                                            kSize, 1);
+        r->setScene(scene);
+        return r;
+    };
+    auto ra = make(a), rb = make(b);
+    PairedSequences out;
+    for (int s = 0; s < sequences; ++s) {
+        ImageData mean[2];
+        int k = 0;
+        for (Renderer* r : {ra.get(), rb.get()}) {
+            r->setSeed(seedBase() + 7919u * uint32_t(s));
+            r->reset();
+            for (int f = 0; f < kFrames; ++f) {
+                r->setTime(f * dt);
+                r->frame();
+                ImageData img = r->readOutput(port);
+                if (f == 0) {
+                    mean[k] = img;
+                } else {
+                    for (size_t i = 0; i < img.pixels.size(); ++i)
+                        mean[k].pixels[i] += img.pixels[i];
+                }
+            }
+            for (auto& v : mean[k].pixels) v /= float(kFrames);
+            mean[k] = test::toLuminance(mean[k]);
+            ++k;
+        }
+        out.a.add(mean[0]);
+        if (const char* dump = std::getenv("LOOM_PSMS_ABLATION_DUMP"))  // per-sequence images
+            for (int k = 0; k < 2; ++k)
+                writeImage(std::string(dump) + "/" + std::to_string(s) + (k ? "_b" : "_a") + ".pfm",
+                           mean[k]);
+        std::vector<double> d(kSize * kSize);
+        for (uint32_t i = 0; i < kSize * kSize; ++i)
+            d[i] =
+                double(mean[1].pixels[i * mean[1].channels]) - mean[0].pixels[i * mean[0].channels];
+        out.diff.push_back(std::move(d));
+    }
+    return out;
+}
+
+// Sum over block x block pixel blocks (those with a nonzero spread) of z^2, z = the block's mean
+// paired difference over its standard error, each sequence's difference multiplied by its sign.
+double pairedChi2(const std::vector<std::vector<double>>& diff, const std::vector<int>& sign,
+                  int block, int* blocks = nullptr, double* worstZ = nullptr) {
+    int n = int(diff.size()), nb = int(kSize) / block, used = 0;
+    double chi2 = 0.0, worst = 0.0;
+    for (int by = 0; by < nb; ++by)
+        for (int bx = 0; bx < nb; ++bx) {
+            double sum = 0.0, sum2 = 0.0;
+            for (int s = 0; s < n; ++s) {
+                double v = 0.0;
+                for (int y = by * block; y < (by + 1) * block; ++y)
+                    for (int x = bx * block; x < (bx + 1) * block; ++x) v += diff[s][y * kSize + x];
+                v *= sign[s];
+                sum += v;
+                sum2 += v * v;
+            }
+            double m = sum / n, var = (sum2 - n * m * m) / (n - 1);
+            if (!(var > 1e-30)) continue;
+            double z = m / std::sqrt(var / n);
+            chi2 += z * z;
+            worst = std::max(worst, std::abs(z));
+            ++used;
+        }
+    if (blocks) *blocks = used;
+    if (worstZ) *worstZ = worst;
+    return chi2;
+}
+
+// The observed pairedChi2 against its sign-flip null (each sequence's difference negated at
+// random, `flips` times): the fraction of flips at or above the observed value. Sign flips keep
+// each sequence's sparsity, but assume a difference symmetric about 0: skewed differences of two
+// unbiased settings fail it too (the control in DISABLED_WalkBackOffIsDetected), so this is a
+// diagnostic, not a test of the mean.
+double signFlipP(const std::vector<std::vector<double>>& diff, int block, int flips,
+                 const char* what) {
+    std::vector<int> sign(diff.size(), 1);
+    int blocks = 0;
+    double worst = 0.0;
+    double obs = pairedChi2(diff, sign, block, &blocks, &worst);
+    std::mt19937 rng(12345);
+    std::vector<double> null;
+    for (int f = 0; f < flips; ++f) {
+        for (auto& v : sign) v = (rng() & 1u) ? 1 : -1;
+        null.push_back(pairedChi2(diff, sign, block));
+    }
+    std::sort(null.begin(), null.end());
+    double p = double(null.end() - std::lower_bound(null.begin(), null.end(), obs)) / flips;
+    std::printf(
+        "%s, %dx%d px blocks: %d blocks with a difference, worst |z| %.2f, sum z^2 %.1f; "
+        "sign-flip null median %.1f, 99%% %.1f, max %.1f; p %.4f\n",
+        what, block, block, blocks, worst, obs, null[flips / 2], null[flips * 99 / 100],
+        null.back(), p);
+    return p;
+}
+
+// Disabled: an experiment (about 6 min per 64 sequences), open (issue 16). Walk back off minus
+// on, paired, on the bumpy mirror with 4 neighbours in 3 px (LOOM_PSMS_ABLATION_PARAMS to
+// change). It asks for the 2 x 2 regions' |z| > 5 and so far fails: measured 1.49 (64 sequences),
+// 1.50 at paper defaults and 0.98 on a rippled mirror (README, "The walk-back ablation in the
+// image"). The per-block sign-flip statistics it prints are not calibrated: the control
+// LOOM_PSMS_ABLATION_B='{"spatial.mis": "defensivePairwise"}' (two unbiased settings) is rejected
+// per pixel as strongly as walk back off. Env: _SEQUENCES, _SCENE (a path under the source tree,
+// or absolute), _PARAMS (JSON overrides for both), _B (for the second), _DUMP (a folder for
+// per-sequence images: s_a.pfm, s_b.pfm). Run with --gtest_also_run_disabled_tests.
 TEST(ManifoldReSTIR, DISABLED_WalkBackOffIsDetected) {
-    int sequences = 16;
+    int sequences = 64;
     if (const char* s = std::getenv("LOOM_PSMS_ABLATION_SEQUENCES")) sequences = std::atoi(s);
-    auto on = compareReuse("scenes/bumpy_mirror.json", "psms_restir.json", "spatial", {}, 0.0f,
-                           sequences);
-    auto off = compareReuse("scenes/bumpy_mirror.json", "psms_restir.json", "spatial",
-                            {{"temporal.bijectivity", false}, {"spatial.bijectivity", false}}, 0.0f,
-                            sequences);
-    std::printf("bumpy mirror: walk back on |z| %.2f, off |z| %.2f against SMS\n", on.zSms,
-                off.zSms);
-    EXPECT_LT(on.zSms, 3.0);
-    EXPECT_LT(on.zPt, 3.0);
-    EXPECT_GT(off.zSms, 6.0) << "reuse without the walk back went unseen";
+    std::string sceneFile = "scenes/bumpy_mirror.json";
+    if (const char* s = std::getenv("LOOM_PSMS_ABLATION_SCENE")) sceneFile = s;
+    json a = {{"spatial.radius", 3}, {"spatial.neighbours", 4}};
+    if (const char* s = std::getenv("LOOM_PSMS_ABLATION_PARAMS")) a = json::parse(s);
+    json b = {{"temporal.bijectivity", false}, {"spatial.bijectivity", false}};
+    if (const char* s = std::getenv("LOOM_PSMS_ABLATION_B")) b = json::parse(s);
+    json bAll = a;
+    for (auto& [k, v] : b.items()) bAll[k] = v;
+    auto paired = pairedDifference(sceneFile, "psms_restir.json", "spatial.caustic", a, bAll, 0.0f,
+                                   sequences);
+    std::printf("%s, %d sequences: a = %s, b = a + %s\n", sceneFile.c_str(), sequences,
+                a.dump().c_str(), b.dump().c_str());
+    RegionStats d(2);
+    for (auto& img : paired.diff) {
+        ImageData di;
+        di.width = di.height = kSize;
+        di.channels = 3;
+        di.pixels.resize(kSize * kSize * 3);
+        for (uint32_t i = 0; i < kSize * kSize; ++i)
+            for (int c = 0; c < 3; ++c) di.pixels[i * 3 + c] = float(img[i]);
+        d.add(di);
+    }
+    for (int i = 0; i < 4; ++i)
+        std::printf("region %d: a %.5f +- %.5f, b - a %+.6f +- %.6f\n", i, paired.a.mean(i * 3),
+                    std::sqrt(paired.a.stderr2(i * 3)), d.mean(i * 3), std::sqrt(d.stderr2(i * 3)));
+    double worst = 0.0;
+    for (int i = 0; i < 4; ++i)
+        worst = std::max(worst, std::abs(d.mean(i * 3)) / std::sqrt(d.stderr2(i * 3) + 1e-30));
+    for (int block : {1, 2, 4, 8}) signFlipP(paired.diff, block, 1000, "b - a");
+    EXPECT_GT(worst, 5.0) << "reuse without the walk back went unseen in 2 x 2 regions";
 }
 
 // Control for the moving-camera comparisons: psms without reuse, at the same frame times.
