@@ -25,10 +25,15 @@ void main() {
     if (r.W > 0.0) {
         RestirSettings cfg = settings_in;
         CameraPose pose = scene_info.camera_open;
-        vec3 self_F = restir_shift(cfg, r.s, restir_domain_primary(cfg, r.s, primary_in[idx], ivec2(pixel), pose));
-        ivec2 rp = ivec2(min(pixel.x + 1u, pc.frameSize.x - 1u), pixel.y);
-        uint right = uint(rp.y) * pc.frameSize.x + uint(rp.x);
-        vec3 other_F = restir_shift(cfg, r.s, restir_domain_primary(cfg, r.s, primary_in[right], rp, pose));
+        // The own pixel, then the right-hand neighbour: one restir_shift call site (lavapipe
+        // compiles every inlined shift separately).
+        vec3 shifted_F[2];
+        for (uint k = 0u; k < 2u; ++k) {
+            ivec2 rp = ivec2(min(pixel.x + k, pc.frameSize.x - 1u), pixel.y);
+            uint q = uint(rp.y) * pc.frameSize.x + uint(rp.x);
+            shifted_F[k] = restir_shift(cfg, r.s, restir_domain_primary(cfg, r.s, primary_in[q], rp, pose));
+        }
+        vec3 self_F = shifted_F[0], other_F = shifted_F[1];
         // x: stored target, y: target after the self shift, z: neighbour target, w: rc index.
         out_value = vec4(r.target, luminance(self_F), luminance(other_F), float(path_rc_index(r.s)) + 16.0 * float(path_length(r.s)) + (path_last_nee(r.s) ? 256.0 : 0.0));
     }
