@@ -367,7 +367,8 @@ double signFlipP(const std::vector<std::vector<double>>& diff, int block, int fl
 // image"). The per-block sign-flip statistics it prints are not calibrated: the control
 // LOOM_PSMS_ABLATION_B='{"spatial.mis": "defensivePairwise"}' (two unbiased settings) is rejected
 // per pixel as strongly as walk back off. Env: _SEQUENCES, _SCENE (a path under the source tree,
-// or absolute), _PARAMS (JSON overrides for both), _B (for the second), _DUMP (a folder for
+// or absolute), _PARAMS (JSON overrides for both), _B (for the second), _DT (the frame time
+// step, 0: static camera), _DUMP (a folder for
 // per-sequence images: s_a.pfm, s_b.pfm). Run with --gtest_also_run_disabled_tests.
 TEST(ManifoldReSTIR, DISABLED_WalkBackOffIsDetected) {
     int sequences = 64;
@@ -380,8 +381,10 @@ TEST(ManifoldReSTIR, DISABLED_WalkBackOffIsDetected) {
     if (const char* s = std::getenv("LOOM_PSMS_ABLATION_B")) b = json::parse(s);
     json bAll = a;
     for (auto& [k, v] : b.items()) bAll[k] = v;
-    auto paired = pairedDifference(sceneFile, "psms_restir.json", "spatial.caustic", a, bAll, 0.0f,
-                                   sequences);
+    float dt = 0.0f;  // frame time step along the scene's camera path: 0 static, 3 moving
+    if (const char* s = std::getenv("LOOM_PSMS_ABLATION_DT")) dt = float(std::atof(s));
+    auto paired =
+        pairedDifference(sceneFile, "psms_restir.json", "spatial.caustic", a, bAll, dt, sequences);
     std::printf("%s, %d sequences: a = %s, b = a + %s\n", sceneFile.c_str(), sequences,
                 a.dump().c_str(), b.dump().c_str());
     RegionStats d(2);
