@@ -675,6 +675,8 @@ StrategyRun renderStrategy(const Scene& scene, const std::vector<bool>& mask, co
 // of at least a quarter of the median region's (dark corners carry no power).
 struct Agreement {
     double maxZ = 0.0, detectable = 0.0, medianDetectable = 0.0;
+    int worstRegion = -1;           // row-major
+    double worstA = 0, worstB = 0;  // its two means
 };
 
 Agreement compareRegions(const RegionStats& a, const RegionStats& b, double zLimit,
@@ -688,7 +690,12 @@ Agreement compareRegions(const RegionStats& a, const RegionStats& b, double zLim
     std::vector<double> detect;
     for (size_t i = 0; i < a.sum.size(); i += 3) {
         double se = std::sqrt(a.stderr2(i) + b.stderr2(i));
-        if (se > 0.0) g.maxZ = std::max(g.maxZ, std::abs(a.mean(i) - b.mean(i)) / se);
+        if (se > 0.0 && std::abs(a.mean(i) - b.mean(i)) / se > g.maxZ) {
+            g.maxZ = std::abs(a.mean(i) - b.mean(i)) / se;
+            g.worstRegion = int(i / 3);
+            g.worstA = a.mean(i);
+            g.worstB = b.mean(i);
+        }
         if (unmasked[i / 3] >= 0.5 && b.mean(i) >= floorMean)
             detect.push_back(zLimit * se / b.mean(i));
     }
@@ -774,10 +781,11 @@ TEST(PathTracer, StrategiesAgreeOnProjectScenes) {
             Agreement image = compareRegions(run.image, bsdf.image, 4.0, unmasked1);
             std::printf(
                 "%s %s vs bsdf: image %+.3f%% (|z| %.2f, detects %.2f%%), regions max |z| "
-                "%.2f (detects %.2f%%, median region %.2f%%)\n",
+                "%.2f (region %d: %.5g vs %.5g; detects %.2f%%, median region %.2f%%)\n",
                 c.scene, strategy, 100 * (run.image.mean(0) / bsdf.image.mean(0) - 1.0), image.maxZ,
-                100 * image.detectable, regions.maxZ, 100 * regions.detectable,
-                100 * regions.medianDetectable);
+                100 * image.detectable, regions.maxZ, regions.worstRegion, regions.worstA,
+                regions.worstB, 100 * regions.detectable, 100 * regions.medianDetectable);
+            std::fflush(stdout);
             EXPECT_LT(image.maxZ, 4.0) << c.scene << " " << strategy;
             EXPECT_LT(regions.maxZ, 4.5) << c.scene << " " << strategy;
             EXPECT_LT(image.detectable, 0.01) << c.scene << " " << strategy << ": too weak";
