@@ -27,8 +27,34 @@ using test::loadGraph;
 using test::RegionStats;
 using test::sourcePath;
 
-// `sequences` runs of `frames` frames (frame f at time f dt); per port the statistics of each
-// run's mean luminance over 2 x 2 regions, without the pixels `skip` marks (port 0 only).
+// One sequence: history reset, `seed`, `frames` frames (frame f at time f dt); per port the
+// mean luminance image.
+std::vector<ImageData> sequenceMeans(Renderer& r, const std::vector<std::string>& ports,
+                                     uint32_t seed, int frames, float dt) {
+    r.setSeed(seed);
+    r.reset();
+    std::vector<ImageData> mean(ports.size());
+    for (int f = 0; f < frames; ++f) {
+        r.setTime(f * dt);
+        r.frame();
+        for (size_t p = 0; p < ports.size(); ++p) {
+            ImageData img = r.readOutput(ports[p]);
+            if (f == 0) {
+                mean[p] = img;
+            } else {
+                for (size_t i = 0; i < img.pixels.size(); ++i) mean[p].pixels[i] += img.pixels[i];
+            }
+        }
+    }
+    for (auto& m : mean) {
+        for (auto& v : m.pixels) v /= float(frames);
+        m = test::toLuminance(m);
+    }
+    return mean;
+}
+
+// `sequences` runs of sequenceMeans; per port the statistics of each run's mean luminance over
+// 2 x 2 regions, without the pixels `skip` marks (port 0 only).
 std::vector<RegionStats> sequencePorts(std::unique_ptr<RenderGraph> g, const scene::Scene& scene,
                                        const std::vector<std::string>& ports, int sequences,
                                        int frames, float dt, uint32_t size, uint32_t seed,
@@ -37,26 +63,8 @@ std::vector<RegionStats> sequencePorts(std::unique_ptr<RenderGraph> g, const sce
     r.setScene(scene);
     std::vector<RegionStats> stats(ports.size(), RegionStats(2));
     for (int s = 0; s < sequences; ++s) {
-        r.setSeed(seed + 7919u * uint32_t(s));
-        r.reset();
-        std::vector<ImageData> mean(ports.size());
-        for (int f = 0; f < frames; ++f) {
-            r.setTime(f * dt);
-            r.frame();
-            for (size_t p = 0; p < ports.size(); ++p) {
-                ImageData img = r.readOutput(ports[p]);
-                if (f == 0) {
-                    mean[p] = img;
-                } else {
-                    for (size_t i = 0; i < img.pixels.size(); ++i)
-                        mean[p].pixels[i] += img.pixels[i];
-                }
-            }
-        }
-        for (size_t p = 0; p < ports.size(); ++p) {
-            for (auto& v : mean[p].pixels) v /= float(frames);
-            stats[p].add(test::toLuminance(mean[p]), p == 0 ? skip : nullptr);
-        }
+        auto mean = sequenceMeans(r, ports, seed + 7919u * uint32_t(s), frames, dt);
+        for (size_t p = 0; p < ports.size(); ++p) stats[p].add(mean[p], p == 0 ? skip : nullptr);
     }
     return stats;
 }
@@ -92,6 +100,11 @@ std::vector<uint8_t> directEmitterPixels(const scene::Scene& scene, int frames, 
     return grown;
 }
 
+// A large trial cap and 1024 presamples (the prior's tails, test_psms.cpp).
+json largeTrialCap() {
+    return {{"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}, {"prior.presamples", 1024}};
+}
+
 struct Agreement {
     double zPt, zSms;  // worst |z|: full image against PT, caustic against SMS
 };
@@ -114,8 +127,7 @@ Agreement compareReuse(const std::string& sceneFile, const std::string& graphFil
     if (const char* k = std::getenv("LOOM_PSMS_FRAME_SCALE"))
         sequences *= std::max(1, std::atoi(k));
     auto scene = scene::loadScene(sourcePath(sceneFile));
-    json o = {
-        {"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}, {"prior.presamples", 1024}};
+    json o = largeTrialCap();
     for (auto& [k, v] : overrides.items()) o[k] = v;
     auto skip = directEmitterPixels(scene, kFrames, dt, kSize);
     auto reuse =
@@ -257,10 +269,8 @@ PairedSequences pairedDifference(const std::string& sceneFile, const std::string
                                  const std::string& port, const json& a, const json& b, float dt,
                                  int sequences) {
     auto scene = scene::loadScene(sceneFile[0] == '/' ? sceneFile : sourcePath(sceneFile));
-    json base = {
-        {"psms.maxTrials", 1000000}, {"psms.trialDispatches", 64}, {"prior.presamples", 1024}};
     auto make = [&](const json& o) {
-        json all = base;
+        json all = largeTrialCap();
         for (auto& [k, v] : o.items()) all[k] = v;
         auto r = std::make_unique<Renderer>(test::gpuContext(), loadGraph(graphFile, all), kSize,
                                             kSize, 1);
@@ -270,26 +280,9 @@ PairedSequences pairedDifference(const std::string& sceneFile, const std::string
     auto ra = make(a), rb = make(b);
     PairedSequences out;
     for (int s = 0; s < sequences; ++s) {
-        ImageData mean[2];
-        int k = 0;
-        for (Renderer* r : {ra.get(), rb.get()}) {
-            r->setSeed(seedBase() + 7919u * uint32_t(s));
-            r->reset();
-            for (int f = 0; f < kFrames; ++f) {
-                r->setTime(f * dt);
-                r->frame();
-                ImageData img = r->readOutput(port);
-                if (f == 0) {
-                    mean[k] = img;
-                } else {
-                    for (size_t i = 0; i < img.pixels.size(); ++i)
-                        mean[k].pixels[i] += img.pixels[i];
-                }
-            }
-            for (auto& v : mean[k].pixels) v /= float(kFrames);
-            mean[k] = test::toLuminance(mean[k]);
-            ++k;
-        }
+        uint32_t seed = seedBase() + 7919u * uint32_t(s);
+        ImageData mean[2] = {sequenceMeans(*ra, {port}, seed, kFrames, dt)[0],
+                             sequenceMeans(*rb, {port}, seed, kFrames, dt)[0]};
         out.a.add(mean[0]);
         if (const char* dump = std::getenv("LOOM_PSMS_ABLATION_DUMP"))  // per-sequence images
             for (int k = 0; k < 2; ++k)
@@ -368,8 +361,8 @@ double signFlipP(const std::vector<std::vector<double>>& diff, int block, int fl
 // LOOM_PSMS_ABLATION_B='{"spatial.mis": "defensivePairwise"}' (two unbiased settings) is rejected
 // per pixel as strongly as walk back off. Env: _SEQUENCES, _SCENE (a path under the source tree,
 // or absolute), _PARAMS (JSON overrides for both), _B (for the second), _DT (the frame time
-// step, 0: static camera), _DUMP (a folder for
-// per-sequence images: s_a.pfm, s_b.pfm). Run with --gtest_also_run_disabled_tests.
+// step, 0: static camera), _DUMP (a folder for per-sequence images: s_a.pfm, s_b.pfm). Run
+// with --gtest_also_run_disabled_tests.
 TEST(ManifoldReSTIR, DISABLED_WalkBackOffIsDetected) {
     int sequences = 64;
     if (const char* s = std::getenv("LOOM_PSMS_ABLATION_SEQUENCES")) sequences = std::atoi(s);
