@@ -690,8 +690,9 @@ Agreement compareRegions(const RegionStats& a, const RegionStats& b, double zLim
     std::vector<double> detect;
     for (size_t i = 0; i < a.sum.size(); i += 3) {
         double se = std::sqrt(a.stderr2(i) + b.stderr2(i));
-        if (se > 0.0 && std::abs(a.mean(i) - b.mean(i)) / se > g.maxZ) {
-            g.maxZ = std::abs(a.mean(i) - b.mean(i)) / se;
+        double z = se > 0.0 ? std::abs(a.mean(i) - b.mean(i)) / se : 0.0;
+        if (z > g.maxZ) {
+            g.maxZ = z;
             g.worstRegion = int(i / 3);
             g.worstA = a.mean(i);
             g.worstB = b.mean(i);
