@@ -693,7 +693,8 @@ double maxEmittedRadiance(const Scene& scene) {
 }
 
 // Every strategy reaches some light only through rare emitter hits: BSDF sampling always, and
-// NEE and MIS through delta vertices (glass, mirrors), where light sampling cannot connect.
+// NEE and MIS through delta vertices (glass, mirrors, smooth coats, null boundaries), where
+// light sampling cannot connect.
 // The most one such hit adds to one frame's mean over `pixels` pixels at `spp` samples:
 // maxEmittedRadiance / (spp pixels), path throughput being at most 1 there.
 double rareHitBound(const Scene& scene, bool bsdfSampling, int spp, double pixels) {
@@ -702,7 +703,7 @@ double rareHitBound(const Scene& scene, bool bsdfSampling, int spp, double pixel
         if (s.material < 0 || size_t(s.material) >= scene.materials.size()) continue;
         BsdfType t = scene.materials[s.material].type;
         delta = delta || t == BsdfType::Dielectric || t == BsdfType::Conductor ||
-                t == BsdfType::Plastic;
+                t == BsdfType::Plastic || t == BsdfType::Null;
     }
     return bsdfSampling || delta ? maxEmittedRadiance(scene) / (spp * pixels) : 0.0;
 }
