@@ -5,8 +5,11 @@
 # a crash, a leak, a sanitizer report, a non-UserError exception or an input slower than 10 s.
 #
 #   tools/fuzz.sh [--seconds N] [--runs N] [--jobs J] [--seed S] [--build DIR] [--out DIR]
-#                 [HARNESS...]
+#                 [--build-only] [HARNESS...]
 #                 (defaults: 60 s, 2 jobs, a random seed, build-fuzz/, out/fuzz/, all seven)
+#
+# --build-only builds the harnesses and stops (ctest builds them in a test of its own, beside the
+# other tests, and fuzzes in a serial one).
 #
 # --seed fixes libFuzzer's random seed (ctest passes 1): a failing CI run then replays here
 # with the same command, the seed printed in its table.
@@ -23,6 +26,7 @@ fuzz_seed=0
 build=build-fuzz
 out=out/fuzz
 harnesses=()
+build_only=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
@@ -31,7 +35,8 @@ while [ $# -gt 0 ]; do
     --seed) fuzz_seed=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n 2,14p "$0"; exit 0 ;;
+    --build-only) build_only=1; shift ;;
+    -h|--help) sed -n 2,17p "$0"; exit 0 ;;
     -*) echo "fuzz.sh: unknown option '$1'" >&2; exit 2 ;;
     *) harnesses+=("$1"); shift ;;
   esac
@@ -55,6 +60,7 @@ fi
 targets=()
 for h in "${harnesses[@]}"; do targets+=("fuzz_$h"); done
 cmake --build "$build" --target "${targets[@]}" | tail -1
+[ "$build_only" = 1 ] && exit 0
 
 # Seed corpora: fuzz/seeds/<harness> (formats the project keeps no files of), the project's own
 # files of each format, and ../shared/scenes where present.
