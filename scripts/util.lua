@@ -35,6 +35,7 @@ end
 -- camera's shutter (with params["pt.motionBlur"] = true: a motion-blurred reference).
 -- `opts.camera` ({origin, target, up, fov}) replaces the scene camera and its path.
 -- A graph without a path tracer (e.g. graphs/sms.json) takes spp = 0 (one estimate per frame).
+-- `opts.output` is the accumulated port to keep (default accum.output).
 function util.reference(opts)
   local path = opts.path
   if path == nil then
@@ -61,7 +62,7 @@ function util.reference(opts)
     gpu_ms = gpu_ms + r:timings().frame_ms
     loom.progress(f, opts.frames, "reference")
   end
-  local img = r:image("accum.output")
+  local img = r:image(opts.output or "accum.output")
   if path and path ~= "" then img:write(path) end
   local spp = (opts.spp and opts.spp > 0) and r:get("pt.samplesPerPixel") or 1
   print(string.format("reference: rendered %d frames x %d spp (%.0f ms GPU)%s", opts.frames, spp,
