@@ -13,10 +13,11 @@
 const uint MANIFOLD_NO_SHAPE = ~0u;
 
 struct ManifoldSample {
-    vec4 x1;       // xyz the first specular vertex (world, in its reservoir's frame), w unused
+    vec4 x1;       // xyz the first specular vertex (world, in its reservoir's frame), w word 0
+                   // of the offset normals' stream (bits; rough casters)
     uvec4 shapes;  // shape of each chain vertex, MANIFOLD_NO_SHAPE after the last
     vec4 light;    // xy light-local coordinates of x_n (a triangle's barycentrics), z light
-                   // index (bits), w unused
+                   // index (bits), w word 1 of the offset normals' stream (bits)
 };
 
 struct ManifoldReservoir {
@@ -42,6 +43,16 @@ ManifoldReservoir manifold_reservoir_empty(PrimaryHit receiver) {
     r.F = vec4(0.0);
     r.weight = vec4(0.0, primary_valid(receiver) ? 1.0 : 0.0, 0.0, 0.0);
     return r;
+}
+
+// The two words of a sample's offset normals' stream (manifold_offset_stream, sms.glsl).
+uvec2 manifold_sample_offset_seed(ManifoldSample s) {
+    return uvec2(floatBitsToUint(s.x1.w), floatBitsToUint(s.light.w));
+}
+
+void manifold_sample_set_offset_seed(inout ManifoldSample s, uvec2 seed) {
+    s.x1.w = uintBitsToFloat(seed.x);
+    s.light.w = uintBitsToFloat(seed.y);
 }
 
 uint manifold_sample_length(ManifoldSample s) {

@@ -5,7 +5,11 @@
 // back: the same solve from the source receiver, seeded at the shifted solution, must find the
 // source solution again (otherwise the shift fails). The sample's domain is x_n (area measure
 // on the light) and which solution, so the shift's Jacobian is 1 for the delta BSDFs every
-// chain vertex has (walk.glsl, manifold_material_specular).
+// chain vertex has (walk.glsl, manifold_material_specular). Rough casters (glossy; under
+// MANIFOLD_ROUGH_CASTERS): a rough vertex scatters about an offset normal drawn from two random
+// numbers of the sample's offset stream; the shift replays that stream, so the domain gains the
+// offsets' random numbers (uniform, density 1), the shift keeps them as it keeps x_n, and its
+// Jacobian is still 1 (F carries the rough vertex's weight, the integrand in those numbers).
 #ifndef LOOM_MANIFOLD_SHIFT_GLSL
 #define LOOM_MANIFOLD_SHIFT_GLSL
 
@@ -41,6 +45,9 @@ bool manifold_solve_sample(PrimaryHit ph, ManifoldSample s, vec3 seed, ManifoldS
     ManifoldReceiver rc = manifold_receiver(sh, wo_world, ml);
     ManifoldTrial tr = manifold_trial_start(rc.x0, rc.ng0, ml.y, ml.n, rc.es, rc.et,
                                             ml.directional, false, seed);
+#if defined(MANIFOLD_ROUGH_CASTERS) && !defined(LOOM_TEST_SHIFT_OFFSETS_NOT_REPLAYED)
+    tr.offset_stream = manifold_offset_stream(manifold_sample_offset_seed(s));  // replayed
+#endif
     while (manifold_trial_running(tr)) {
         Hit hit;
         bool found = trace_closest(tr.ray_o, tr.ray_d, tr.ray_tmin, tr.ray_tmax, BVH_MASK_ALL, hit);
@@ -50,7 +57,7 @@ bool manifold_solve_sample(PrimaryHit ph, ManifoldSample s, vec3 seed, ManifoldS
     if (tr.phase != TRIAL_CONVERGED || tr.chain.k != manifold_sample_length(s)) return false;
     for (uint j = 0u; j < tr.chain.k; ++j)
         if (tr.chain.v[j].shape != s.shapes[j]) return false;
-    t.x1 = vec4(tr.chain.v[0].p, 0.0);
+    t.x1.xyz = tr.chain.v[0].p;
     F = manifold_trial_contribution(tr, ss.ms, sh, shading_to_local(sh, wo_world), ml,
                                     ss.geometric_clamp);
     return luminance(F) > 0.0;

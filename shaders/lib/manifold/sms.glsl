@@ -260,12 +260,18 @@ ManifoldTrial manifold_trial_start(vec3 x0, vec3 ng0, vec3 y, vec3 ny, vec3 es, 
     tr.chain.end_at_infinity = directional;
     tr.proposal.end_at_infinity = directional;
 #ifdef MANIFOLD_ROUGH_CASTERS
-    tr.offset_stream = uvec4(0u);
+    tr.offset_stream = uvec4(0u);  // the caller sets an estimate's own before the first advance
 #endif
     manifold_trial_ray_towards(tr, x0, ng0, straight ? (directional ? x0 + y : y) : seed);
     if (straight && !directional) tr.ray_tmax = length(y - x0) * (1.0 - 1e-4);
     return tr;
 }
+
+// Rough casters: the offset stream of an estimate given as two words. PartitionedSMS keeps them
+// in its reservoir samples (manifold_sample_offset_seed), so that the manifold shift replays the
+// same offset normals: with them held, a chain through rough vertices is specular again and the
+// shift keeps the sample's primary coordinates (x_n and the offsets' random numbers), Jacobian 1.
+uvec4 manifold_offset_stream(uvec2 seed) { return uvec4(seed, 0x0FF5E7A1u, 0u); }
 
 // Where the first vertex moves for step size beta: p - beta (s dX0 + t dX1) (Zeltner Sec. 4.3),
 // from the chain the step was taken at.
