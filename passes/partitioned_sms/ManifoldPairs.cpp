@@ -41,6 +41,17 @@ glm::vec4 boundingSphere(const std::vector<glm::vec3>& p) {
 
 }  // namespace
 
+bool ManifoldPairs::roughCasters(const scene::Scene& s) {
+    for (const auto& shape : s.shapes) {
+        if (!(shape.flags & (scene::kCausticCasterReflect | scene::kCausticCasterRefract)))
+            continue;
+        auto type = s.materials[shape.material].type;
+        if (type == scene::BsdfType::RoughConductor || type == scene::BsdfType::RoughDielectric)
+            return true;
+    }
+    return false;
+}
+
 void ManifoldPairs::build(ExecuteContext& ctx, const std::string& pass) {
     const scene::SceneGpu& gpuScene = ctx.scene();
     const scene::Scene& s = gpuScene.cpu();

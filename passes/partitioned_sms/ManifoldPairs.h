@@ -23,6 +23,9 @@ public:
     void build(ExecuteContext& ctx, const std::string& pass);
     void bind(gpu::Bindings& b) const;
     uint32_t pairs() const { return mEmitters * mCasters; }
+    // Whether a caster of `s` is a rough conductor or dielectric (its chains then scatter
+    // about offset normals: MANIFOLD_ROUGH_CASTERS, lib/manifold/walk.glsl).
+    static bool roughCasters(const scene::Scene& s);
 
 private:
     const scene::Scene* mScene = nullptr;

@@ -53,6 +53,9 @@ public:
         const auto& scene = ctx.scene();
         mPairs.build(ctx, name());
         ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))}};
+        // Rough casters: presample walks scatter about offset normals of their own.
+        if (ManifoldPairs::roughCasters(ctx.scene().cpu()))
+            chain.insert_or_assign("MANIFOLD_ROUGH_CASTERS", std::string("1"));
         auto prior =
             compileKernel(*this, ctx.shaders(), "passes/partitioned_sms/prior.comp", chain);
         auto buffer = ctx.buffer("prior");

@@ -8,6 +8,7 @@
 #include "core/graph/RenderGraph.h"
 #include "core/scene/SceneGpu.h"
 #include "core/util/Log.h"
+#include "passes/partitioned_sms/ManifoldPairs.h"
 
 namespace loom {
 
@@ -46,6 +47,9 @@ gpu::ComputePipeline& ManifoldReusePass::kernel(ExecuteContext& ctx, const std::
     ShaderDefines d{{"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"},
                     {"HAS_PATH", ctx.has("color") ? "1" : "0"},
                     {"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))}};
+    // Samples through rough casters carry their offset normals' stream; the shift replays it.
+    if (ManifoldPairs::roughCasters(ctx.scene().cpu()))
+        d.insert_or_assign("MANIFOLD_ROUGH_CASTERS", std::string("1"));
     std::string key;
     for (const auto& [k, v] : d) key += k + "=" + v + ";";
     auto& k = mKernels[key];

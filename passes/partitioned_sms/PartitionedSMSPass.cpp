@@ -60,6 +60,11 @@ public:
         r.param("maxTrials", 128).min(1).doc("Bernoulli trials before the cap (paper: 128)");
         r.paramEnum("trialCap", "keep", {"drop", "keep"})
             .doc("at the cap: keep the sample with K = maxTrials (paper) or drop it (SMS code)");
+        r.param("roughCasters", true)
+            .doc(
+                "rough conductor and dielectric casters scatter about offset normals, one set "
+                "per estimate, kept by its trials and replayed by the manifold shift (off: "
+                "their caustics stay with the path tracer)");
         reflectCausticPath(r, 16);
     }
     void execute(ExecuteContext& ctx) override {
@@ -81,6 +86,10 @@ public:
                               {"HAS_CAUSTIC", ctx.has("caustic") ? "1" : "0"},
                               {"HAS_RESERVOIRS", ctx.has("reservoirs") ? "1" : "0"}};
         ShaderDefines chain{{"MANIFOLD_MAX_VERTICES", std::to_string(param<int>("maxChain"))}};
+        // Compiled in only where the scene has rough casters (llvmpipe runs untaken branches
+        // masked).
+        if (param<bool>("roughCasters") && ManifoldPairs::roughCasters(scene.cpu()))
+            chain.insert_or_assign("MANIFOLD_ROUGH_CASTERS", std::string("1"));
         auto kernel = [&](const char* file, const ShaderDefines& d) {
             return compileKernel(*this, ctx.shaders(),
                                  std::string("passes/partitioned_sms/") + file, d);

@@ -83,6 +83,10 @@ void main() {
             tr.tiles = 1u;  // unrestricted
             tr.region = uvec2(0u);
             tr.first_shape = manifold_caster_shape(caster);
+#ifdef MANIFOLD_ROUGH_CASTERS
+            // Offset normals of the presample's own (the prior only proposes seeds).
+            tr.offset_stream = manifold_offset_stream(uvec2(rng_next_uint(rng), rng_next_uint(rng)));
+#endif
             atomicAdd(prior_walks, 1u);
         } else {
             manifold_trial_advance(tr, found, hit, ms);

@@ -76,6 +76,13 @@ layout(std430) buffer PsmsCounters {
 
 uint psms_pixel_index(uvec2 p) { return p.y * pc.frameSize.x + p.x; }
 
+// Rough casters: the estimate's offset normals' stream, two words of its random stream (whose
+// xyz the trials leave unchanged): the first walk and every Bernoulli trial take the same
+// offsets, and the reservoir keeps the words for the manifold shift.
+uvec2 psms_offset_seed(PsmsPixel st) {
+    return uvec2(st.rng.x | (st.rng.y << 16u), st.rng.z ^ 0x0FF5E7A1u);
+}
+
 ManifoldSettings psms_settings() {
     ManifoldSettings ms;
     ms.constraint = pc.constraint;

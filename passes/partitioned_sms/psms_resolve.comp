@@ -62,6 +62,7 @@ void main() {
         r.s.shapes = st.shapes;
         uint light = floatBitsToUint(st.light_n.w);
         r.s.light = manifold_light_coords(light, st.light_y.xyz);
+        manifold_sample_set_offset_seed(r.s, psms_offset_seed(st));
         r.F.rgb = st.value.rgb * pdf;
         r.F.w = luminance(r.F.rgb);
         r.weight.x = st.x1.w / pdf;

@@ -96,6 +96,9 @@ void main() {
             tr.tiles = pc.tiles;
             tr.region = manifold_seed_tile(u, pc.tiles);
             tr.first_shape = manifold_caster_shape(caster);
+#ifdef MANIFOLD_ROUGH_CASTERS
+            tr.offset_stream = manifold_offset_stream(psms_offset_seed(st));
+#endif
             walks += 1u;
             pending = true;
         }
