@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/scene/SceneLoader.h"
+#include "tests/support/RoughCasters.h"
 
 namespace loom::test {
 
@@ -14,17 +15,7 @@ inline scene::Scene loadPsmsScene(const std::string& spec) {
                  spec.compare(spec.size() - kRough.size(), kRough.size(), kRough) == 0;
     std::string path = rough ? spec.substr(0, spec.size() - kRough.size()) : spec;
     auto scene = scene::loadScene(std::string(LOOM_SOURCE_DIR) + "/" + path);
-    if (!rough) return scene;
-    for (auto& m : scene.materials) {
-        if (m.type == scene::BsdfType::Conductor)
-            m.type = scene::BsdfType::RoughConductor;
-        else if (m.type == scene::BsdfType::Dielectric)
-            m.type = scene::BsdfType::RoughDielectric;
-        else
-            continue;
-        m.alpha = 0.1f;
-        m.distribution = scene::Microfacet::GGX;
-    }
+    if (rough) makeCastersRough(scene, 0.1f, scene::Microfacet::GGX);
     return scene;
 }
 

@@ -21,6 +21,7 @@
 #include "tests/support/KernelColumns.h"
 #include "tests/support/RegionStats.h"
 #include "tests/support/ReuseComparison.h"
+#include "tests/support/RoughCasters.h"
 #include "tests/support/TestSupport.h"
 
 namespace loom {
@@ -781,16 +782,7 @@ TEST(SpecularManifoldSampling, UnbiasedAtReceiversBehindADiffuseBounceAgainstThe
 // made rough (distribution d, roughness alpha).
 scene::Scene roughScene(const char* path, float alpha, scene::Microfacet d) {
     auto scene = scene::loadScene(sourcePath(path));
-    for (auto& m : scene.materials) {
-        if (m.type == scene::BsdfType::Conductor)
-            m.type = scene::BsdfType::RoughConductor;
-        else if (m.type == scene::BsdfType::Dielectric)
-            m.type = scene::BsdfType::RoughDielectric;
-        else
-            continue;
-        m.alpha = alpha;
-        m.distribution = d;
-    }
+    test::makeCastersRough(scene, alpha, d);
     return scene;
 }
 
