@@ -4,10 +4,14 @@
 # one area light, and glossy spheres under a constant environment and an area light), built in
 # Blender through its Python API (bench/peer_cycles.py) and rendered by Cycles with 2 threads,
 # box filter, no denoising, no clamping, Standard view transform, EXR. Prints, per scene and
-# renderer: ms per sample per image (the fixed cost of a 1-sample render subtracted for Cycles,
-# the first frame left out for Loom), and relMSE at SPP samples against a REF_SPP reference of
-# each renderer (variance) and of Cycles (variance plus any difference between the renderers),
-# and the ratio of the two references' means. Never asserts. Skips when Blender is absent.
+# renderer: ms per sample per image, measured the same way for both: one render of SPP samples
+# and one of 1 sample, (time(SPP) - time(1)) / (SPP - 1), which removes scene loading, BVH build
+# and kernel setup (Loom: `loom render --frames 1 --set pt.samplesPerPixel=SPP`, whole process
+# wall time); for Loom also its interactive rate, ms per frame at 1 sample per frame (the first
+# frame left out); and relMSE at SPP samples against a REF_SPP reference of each renderer
+# (variance) and of Cycles (variance plus any difference between the renderers), and the ratio
+# of the two references' means, and Loom's time to Cycles' error. Timings are the minimum over
+# REPS (default 3) interleaved repetitions. Never asserts. Skips when Blender is absent.
 #
 #   bash bench/peer_cycles.sh                      # 128x128, 64 spp, 64 bounces, 2048-spp references
 #   SPP=16 REF_SPP=256 WIDTH=64 HEIGHT=64 bash bench/peer_cycles.sh    # quicker
@@ -18,7 +22,7 @@ source "$(dirname "$0")/lib.sh"
 command -v blender >/dev/null || { echo "peer_cycles.sh: skipped: Blender is not installed (apt-get install blender)"; exit 0; }
 
 W=${WIDTH:-128} H=${HEIGHT:-128} SPP=${SPP:-64} REF_SPP=${REF_SPP:-2048}
-THREADS=${THREADS:-2} BOUNCES=${BOUNCES:-64} OUT=${OUT:-out/peer_cycles}
+THREADS=${THREADS:-2} BOUNCES=${BOUNCES:-64} OUT=${OUT:-out/peer_cycles} REPS=${REPS:-3}
 SCENES=${SCENES:-"cornell_grey glossy_env"}
 mkdir -p "$OUT"
 export LP_NUM_THREADS=$THREADS WIDTH=$W HEIGHT=$H
@@ -28,41 +32,59 @@ cycles() {  # scene spp out.exr seed -> prints render seconds
     "$3" "$THREADS" "$BOUNCES" "$4" >"$3.log" 2>&1 || { echo "Cycles failed: $(tail -3 "$3.log")" >&2; exit 1; }
   sed -n 's/^peer_cycles: render_s=\([0-9.]*\).*/\1/p' "$3.log"
 }
-loom_pt() {  # scene spp out.exr seed -> prints wall ms per frame (1 sample per frame)
+loom_pt() {  # scene spp out.exr seed -> prints wall seconds of the whole render (spp in one frame)
+  local t0 t1
+  t0=$(date +%s.%N)
   "$LOOM" render graphs/pt.json --scene "bench/data/peer/$1.json" --width "$W" --height "$H" \
-    --frames "$2" --seed "$4" --set pt.maxBounces="$BOUNCES" --set pt.samplesPerPixel=1 \
-    --timings --quiet --out "$3" >"$3.log" 2>&1 || { echo "Loom failed: $(tail -3 "$3.log")" >&2; exit 1; }
-  awk '/^frame \(wall\)/ {print $3}' "$3.log"
+    --frames 1 --seed "$4" --set pt.maxBounces="$BOUNCES" --set pt.samplesPerPixel="$2" \
+    --quiet --out "$3" >"$3.log" 2>&1 || { echo "Loom failed: $(tail -3 "$3.log")" >&2; exit 1; }
+  t1=$(date +%s.%N)
+  awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.4f", b - a}'
+}
+loom_interactive() {  # scene frames -> prints wall ms per frame at 1 sample per frame
+  "$LOOM" render graphs/pt.json --scene "bench/data/peer/$1.json" --width "$W" --height "$H" \
+    --frames "$2" --set pt.maxBounces="$BOUNCES" --set pt.samplesPerPixel=1 \
+    --timings --quiet --out "$OUT/interactive.exr" >"$OUT/interactive.log" 2>&1 || { echo "Loom failed: $(tail -3 "$OUT/interactive.log")" >&2; exit 1; }
+  awk '/^frame \(wall\)/ {print $3}' "$OUT/interactive.log"
 }
 compare() { "$LOOM" run bench/peer_compare.lua image="$1" ref="$2"; }
 
 echo "peer_cycles: ${W}x${H}, $SPP spp, $BOUNCES bounces, references $REF_SPP spp, $THREADS threads; $(blender --version 2>/dev/null | head -1); $(uptime)"
-rows="| scene | renderer | ms/sample | relMSE vs own ref | relMSE vs Cycles ref | ref mean / Cycles ref mean |
-| --- | --- | --- | --- | --- | --- |"
+rows="| scene | renderer | ms/sample | ms/frame at 1 spp | relMSE vs own ref | relMSE vs Cycles ref | ref mean / Cycles ref mean | time at equal error / Cycles' |
+| --- | --- | --- | --- | --- | --- | --- | --- |"
 csv=$OUT/peer_cycles.csv
-echo "scene,renderer,width,height,spp,ms_per_sample,relmse_own_ref,relmse_cycles_ref,ref_mean_ratio" >"$csv"
+echo "scene,renderer,width,height,spp,ms_per_sample,ms_per_frame_1spp,relmse_own_ref,relmse_cycles_ref,ref_mean_ratio,time_equal_error_vs_cycles" >"$csv"
 for s in $SCENES; do
   tag=${s}_${W}x${H}_b${BOUNCES}
   cref=$OUT/ref_cycles_${tag}_${REF_SPP}.exr lref=$OUT/ref_loom_${tag}_${REF_SPP}.exr
   [ -f "$cref" ] || cycles "$s" "$REF_SPP" "$cref" 1000 >/dev/null
   [ -f "$lref" ] || loom_pt "$s" "$REF_SPP" "$lref" 1000 >/dev/null
-  # Cycles: time(SPP) - time(1) removes scene sync and BVH build.
-  t1=$(cycles "$s" 1 "$OUT/cycles_${tag}_1.exr" 1)
-  tn=$(cycles "$s" "$SPP" "$OUT/cycles_${tag}_$SPP.exr" 1)
-  c_ms=$(awk -v a="$t1" -v b="$tn" -v n="$SPP" 'BEGIN {printf "%.2f", 1000 * (b - a) / (n - 1)}')
-  l_ms=$(loom_pt "$s" "$SPP" "$OUT/loom_${tag}_$SPP.exr" 1)
+  # time(SPP) - time(1) removes scene sync, BVH build and kernel setup; the minimum over REPS
+  # interleaved repetitions of each.
+  c_ms="" l_ms="" l_int=""
+  for ((r = 0; r < REPS; ++r)); do
+    t1=$(cycles "$s" 1 "$OUT/cycles_${tag}_1.exr" 1)
+    tn=$(cycles "$s" "$SPP" "$OUT/cycles_${tag}_$SPP.exr" 1)
+    c_ms=$(awk -v a="$t1" -v b="$tn" -v n="$SPP" -v m="$c_ms" 'BEGIN {v = 1000 * (b - a) / (n - 1); printf "%.2f", (m == "" || v < m) ? v : m}')
+    t1=$(loom_pt "$s" 1 "$OUT/loom_${tag}_1.exr" 1)
+    tn=$(loom_pt "$s" "$SPP" "$OUT/loom_${tag}_$SPP.exr" 1)
+    l_ms=$(awk -v a="$t1" -v b="$tn" -v n="$SPP" -v m="$l_ms" 'BEGIN {v = 1000 * (b - a) / (n - 1); printf "%.2f", (m == "" || v < m) ? v : m}')
+    l_int=$(awk -v v="$(loom_interactive "$s" "$SPP")" -v m="$l_int" 'BEGIN {printf "%.2f", (m == "" || v < m) ? v : m}')
+  done
   c_own=$(compare "$OUT/cycles_${tag}_$SPP.exr" "$cref")
   l_own=$(compare "$OUT/loom_${tag}_$SPP.exr" "$lref")
   l_cyc=$(compare "$OUT/loom_${tag}_$SPP.exr" "$cref")
   refs=$(compare "$lref" "$cref")
+  eq=$(awk -v lm="$l_ms" -v cm="$c_ms" -v le="${l_own%,*}" -v ce="${c_own%,*}" 'BEGIN {printf "%.2f", lm * le / (cm * ce)}')
   rows+="
-| $s | Cycles | $c_ms | ${c_own%,*} | ${c_own%,*} | 1 |
-| $s | Loom (lavapipe) | $l_ms | ${l_own%,*} | ${l_cyc%,*} | ${refs#*,} |"
-  echo "$s,cycles,$W,$H,$SPP,$c_ms,${c_own%,*},${c_own%,*},1" >>"$csv"
-  echo "$s,loom,$W,$H,$SPP,$l_ms,${l_own%,*},${l_cyc%,*},${refs#*,}" >>"$csv"
+| $s | Cycles | $c_ms | | ${c_own%,*} | ${c_own%,*} | 1 | 1 |
+| $s | Loom (lavapipe) | $l_ms | $l_int | ${l_own%,*} | ${l_cyc%,*} | ${refs#*,} | $eq |"
+  echo "$s,cycles,$W,$H,$SPP,$c_ms,,${c_own%,*},${c_own%,*},1,1" >>"$csv"
+  echo "$s,loom,$W,$H,$SPP,$l_ms,$l_int,${l_own%,*},${l_cyc%,*},${refs#*,},$eq" >>"$csv"
 done
 echo
 echo "$rows"
 echo
 echo "relMSE of the two references against each other: variance of both plus any systematic"
-echo "difference; 'ref mean / Cycles ref mean' is Loom's reference over Cycles'. CSV: $csv"
+echo "difference; 'ref mean / Cycles ref mean' is Loom's reference over Cycles'; 'time at equal"
+echo "error' is ms/sample x relMSE (own reference) over Cycles' (relMSE falls as 1/spp). CSV: $csv"
