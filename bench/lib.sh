@@ -6,3 +6,7 @@ BUILD="${BUILD:-$ROOT/build-bench}"
 LOOM="${LOOM:-$BUILD/apps/loom}"
 cd "$ROOT"
 [ -x "$LOOM" ] || { echo "build loom first: cmake -S . -B build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release && ninja -C build-bench loom" >&2; exit 2; }
+
+# The smaller of two numbers, the second possibly empty (a minimum not yet set):
+# best[$k]=$(min_of "$ms" "${best[$k]:-}")
+min_of() { awk -v a="$1" -v b="${2:-}" 'BEGIN { print (b == "" || a + 0 < b + 0) ? a : b }'; }

@@ -33,7 +33,7 @@ for ((r = 0; r < REPS; ++r)); do
       ms=$(kernel_ms "$w" "$shape")
       [ -n "$ms" ] || { echo "llvmpipe_costs.sh: no 'kernel' timing in $OUT/last.log" >&2; exit 1; }
       k="$shape $w"
-      if [ -z "${best[$k]:-}" ] || awk -v a="$ms" -v b="${best[$k]}" 'BEGIN { exit !(a < b) }'; then best[$k]=$ms; fi
+      best[$k]=$(min_of "$ms" "${best[$k]:-}")
     done
   done
 done

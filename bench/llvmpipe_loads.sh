@@ -35,7 +35,7 @@ for ((r = 0; r < REPS; ++r)); do
       ms=$(kernel_ms "$f" "$c")
       [ -n "$ms" ] || { echo "llvmpipe_loads.sh: no 'kernel' timing in $OUT/last.log" >&2; exit 1; }
       k="$c $f"
-      if [ -z "${best[$k]:-}" ] || awk -v a="$ms" -v b="${best[$k]}" 'BEGIN { exit !(a < b) }'; then best[$k]=$ms; fi
+      best[$k]=$(min_of "$ms" "${best[$k]:-}")
     done
   done
 done

@@ -47,6 +47,9 @@ loom_interactive() {  # scene frames -> prints wall ms per frame at 1 sample per
     --timings --quiet --out "$OUT/interactive.exr" >"$OUT/interactive.log" 2>&1 || { echo "Loom failed: $(tail -3 "$OUT/interactive.log")" >&2; exit 1; }
   awk '/^frame \(wall\)/ {print $3}' "$OUT/interactive.log"
 }
+per_sample() {  # seconds of a 1-sample and an SPP-sample render -> ms per sample
+  awk -v a="$1" -v b="$2" -v n="$SPP" 'BEGIN {printf "%.2f", 1000 * (b - a) / (n - 1)}'
+}
 compare() { "$LOOM" run bench/peer_compare.lua image="$1" ref="$2"; }
 
 echo "peer_cycles: ${W}x${H}, $SPP spp, $BOUNCES bounces, references $REF_SPP spp, $THREADS threads; $(blender --version 2>/dev/null | head -1); $(uptime)"
@@ -65,11 +68,11 @@ for s in $SCENES; do
   for ((r = 0; r < REPS; ++r)); do
     t1=$(cycles "$s" 1 "$OUT/cycles_${tag}_1.exr" 1)
     tn=$(cycles "$s" "$SPP" "$OUT/cycles_${tag}_$SPP.exr" 1)
-    c_ms=$(awk -v a="$t1" -v b="$tn" -v n="$SPP" -v m="$c_ms" 'BEGIN {v = 1000 * (b - a) / (n - 1); printf "%.2f", (m == "" || v < m) ? v : m}')
+    c_ms=$(min_of "$(per_sample "$t1" "$tn")" "$c_ms")
     t1=$(loom_pt "$s" 1 "$OUT/loom_${tag}_1.exr" 1)
     tn=$(loom_pt "$s" "$SPP" "$OUT/loom_${tag}_$SPP.exr" 1)
-    l_ms=$(awk -v a="$t1" -v b="$tn" -v n="$SPP" -v m="$l_ms" 'BEGIN {v = 1000 * (b - a) / (n - 1); printf "%.2f", (m == "" || v < m) ? v : m}')
-    l_int=$(awk -v v="$(loom_interactive "$s" "$SPP")" -v m="$l_int" 'BEGIN {printf "%.2f", (m == "" || v < m) ? v : m}')
+    l_ms=$(min_of "$(per_sample "$t1" "$tn")" "$l_ms")
+    l_int=$(min_of "$(loom_interactive "$s" "$SPP")" "$l_int")
   done
   c_own=$(compare "$OUT/cycles_${tag}_$SPP.exr" "$cref")
   l_own=$(compare "$OUT/loom_${tag}_$SPP.exr" "$lref")

@@ -7,6 +7,8 @@
 # lengths and the image stay those of the base kernel. The marginal cost of the duplicate is
 # the stage's cost, divergence included. A last variant writes, per pixel, the path loop's
 # iterations and those of its SIMD batch (subgroupMax), giving the path loop's lane use.
+# rng_x2 duplicates the light sample's random numbers: 2 of the 5 pcg4d hashes a vertex draws
+# (light 2, BSDF 2, Russian roulette 1), so the RNG's whole cost is 2.5 times its marginal.
 # Never asserts.
 #
 #   bash bench/profile_pt.sh                  # grey Cornell box, 128x128, 64 bounces
@@ -31,6 +33,7 @@ VARIANTS=(
   "material_x2|$PATH_GLSL|if \(found\) sh = shading_point\(hit\);|if (found) { sh = shading_point(hit); Material m3 = scene_material(scene_shape(sh.sp.shape).material + (st.depth > 1000u ? 1u : 0u)); if (m3.diffuse.x < -1.0) sh.mat = m3; }"
   "nee_x2|$PATH_GLSL|NeeSample nee = nee_sample\(sh, wo, u_light, ps\.mis, ps\.mis_heuristic\);|NeeSample nee2 = nee_sample(sh, wo, u_light.yxz, ps.mis, ps.mis_heuristic); NeeSample nee = nee_sample(sh, wo, u_light, ps.mis, ps.mis_heuristic); if (nee2.value.x < -1.0) nee = nee2;"
   "bsdf_x2|$PATH_GLSL|BsdfSample bs = bsdf_sample\(sh\.mat, wo, u_bsdf\);|BsdfSample bs2 = bsdf_sample(sh.mat, wo, u_bsdf.yzx); BsdfSample bs = bsdf_sample(sh.mat, wo, u_bsdf); if (bs2.pdf < -1.0) bs = bs2;"
+  "rng_x2|$PATH_GLSL|vec3 u_light = vec3\(rng_next2\(rng\), rng_next\(rng\)\);|Rng rng2 = rng; rng2.state.z ^= 0x9E3779B9u; vec3 u2 = vec3(rng_next2(rng2), rng_next(rng2)); vec3 u_light = vec3(rng_next2(rng), rng_next(rng)); if (u2.x < -1.0) u_light = u2;"
   "emission_x2|$PATH_GLSL|vec3 Le = emitter_hit_radiance\(st\.d, found, sh\);|vec3 Le = emitter_hit_radiance(st.d, found, sh); float lpdf2 = emitter_hit_light_pdf(st.prev_p, -st.d, found, hit.prim, sh); if (lpdf2 < -1.0) Le = vec3(lpdf2);"
 )
 
@@ -79,7 +82,7 @@ pt_ms "${dirs[base]}" >/dev/null  # compile the base kernel once; variants compi
 for ((r = 0; r < REPS; ++r)); do
   for n in "${names[@]}"; do
     ms=$(pt_ms "${dirs[$n]}")
-    if [ -z "${best[$n]:-}" ] || awk -v a="$ms" -v b="${best[$n]}" 'BEGIN { exit !(a < b) }'; then best[$n]=$ms; fi
+    best[$n]=$(min_of "$ms" "${best[$n]:-}")
   done
 done
 

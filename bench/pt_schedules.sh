@@ -42,7 +42,7 @@ for s in $SCENES; do
   for ((r = 0; r < REPS; ++r)); do
     for c in $CONFIGS; do
       read -r ms n < <(run "$s" "$c")
-      if [ -z "${best[$c]:-}" ] || awk -v a="$ms" -v b="${best[$c]}" 'BEGIN { exit !(a < b) }'; then best[$c]=$ms; fi
+      best[$c]=$(min_of "$ms" "${best[$c]:-}")
       rays[$c]=$n
     done
   done

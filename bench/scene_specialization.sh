@@ -42,7 +42,7 @@ for r in "${RUNS[@]}"; do
     for spec in 0 1; do
       while read -r pass ms; do
         key="$spec $pass"
-        if [ -z "${best[$key]:-}" ] || awk -v a="$ms" -v b="${best[$key]}" 'BEGIN { exit !(a < b) }'; then best[$key]=$ms; fi
+        best[$key]=$(min_of "$ms" "${best[$key]:-}")
       done < <(run "$spec" "$graph" "$scene" "$size" "$extra")
     done
   done
