@@ -66,40 +66,54 @@ void main() {
         c.v[i] = vertex_at(uint(v.w), v.xyz);
     }
     manifold_choose_frames(c, y);
-    for (uint i = 0u; i < c.k; ++i) {
+    // One loop over (vertex i, column j, step q, sign), its trip count known only at run time,
+    // and each heavy step in a loop of its own (SEPARATE_BLOCK). llvmpipe runs if-blocks masked
+    // in line, so only loops end LLVM's basic blocks, and its instruction scheduler takes time
+    // quadratic in a block's size: unrolled, the 24 inlined copies of the constraint and the
+    // texture lookups (normal-mapped scenes) took LLVM over 50 minutes to compile.
+    uint one = 1u + uint(row(x, 6).w);  // row 6's w is 0
+#define SEPARATE_BLOCK for (uint once = 0u; once < one; ++once)
+    vec2 diff[2];
+    bool one_cell = true;
+    for (uint t = 0u; t < 24u * c.k; ++t) {
+        uint i = t / 24u, j = (t / 4u) % 6u, q = (t / 2u) & 1u;
+        float sgn = (t & 1u) != 0u ? 1.0 : -1.0;
+        if ((t & 3u) == 0u) {
+            diff[0] = diff[1] = vec2(0.0);
+            one_cell = true;
+        }
+        // Which point moves: vertex m of the chain, or x0 (m = -1) / y (m = k).
+        int m = int(i) + int(j / 2u) - 1;
+        ManifoldChain d = c;
+        vec3 dx0 = vec3(0.0), dy = vec3(0.0);
+        float e = sgn * h * float(q + 1u);
+        if (m < 0) {
+            if (!from_light) dx0 = e * ((j & 1u) != 0u ? et : es);
+        } else if (m >= int(c.k)) {
+            if (from_light) dy = e * ((j & 1u) != 0u ? et : es);
+        } else {
+            ManifoldVertex v = c.v[m];
+            offset_u = fract(row(x, 6).yz + 0.37 * float(m));
+            SEPARATE_BLOCK d.v[m] = vertex_at(v.prim, v.p + e * ((j & 1u) != 0u ? v.t : v.s));
+            ivec2 cell_moved, cell;
+            SEPARATE_BLOCK cell_moved = normal_map_cell(d.v[m]);
+            SEPARATE_BLOCK cell = normal_map_cell(v);
+            one_cell = one_cell && all(equal(cell_moved, cell));
+        }
+        vec2 constraint;
+        SEPARATE_BLOCK constraint = constraint_of(kind, d, x0 + dx0, y + dy, i);
+        diff[q] += sgn * constraint / (2.0 * h * float(q + 1u));
+        if ((t & 3u) != 3u) continue;
         vec2 res;
         mat2 A, B, Cn;
-        bool ok = manifold_constraint_blocks(kind, c, x0, y, from_light, es, et, i, res, A, B, Cn);
-        for (uint j = 0u; j < 6u; ++j) {
-            mat2 M = j < 2u ? A : j < 4u ? B : Cn;
-            vec2 analytic = M[j & 1u];
-            // Which point moves: vertex m of the chain, or x0 (m = -1) / y (m = k).
-            int m = int(i) + int(j / 2u) - 1;
-            // Central differences at h and 2h, Richardson-extrapolated (error O(h^4)): near the
-            // critical angle inside the sphere the O(h^2) term alone reaches 1e-3 at h = 1e-3.
-            vec2 diff[2] = vec2[2](vec2(0.0), vec2(0.0));
-            bool one_cell = true;
-            for (int q = 0; q < 2; ++q)
-                for (int sgn = -1; sgn <= 1; sgn += 2) {
-                    ManifoldChain d = c;
-                    vec3 dx0 = vec3(0.0), dy = vec3(0.0);
-                    float e = float(sgn) * h * float(q + 1);
-                    if (m < 0) {
-                        if (!from_light) dx0 = e * ((j & 1u) != 0u ? et : es);
-                    } else if (m >= int(c.k)) {
-                        if (from_light) dy = e * ((j & 1u) != 0u ? et : es);
-                    } else {
-                        ManifoldVertex v = c.v[m];
-                        offset_u = fract(row(x, 6).yz + 0.37 * float(m));
-                        d.v[m] = vertex_at(v.prim, v.p + e * ((j & 1u) != 0u ? v.t : v.s));
-                        one_cell = one_cell && all(equal(normal_map_cell(d.v[m]), normal_map_cell(v)));
-                    }
-                    diff[q] += float(sgn) * constraint_of(kind, d, x0 + dx0, y + dy, i) /
-                               (2.0 * h * float(q + 1));
-                }
-            vec2 extrapolated = (4.0 * diff[0] - diff[1]) / 3.0;
-            imageStore(outputImage, ivec2(x, 6 * int(i) + int(j)),
-                       !ok ? vec4(1e30) : one_cell ? vec4(analytic, extrapolated) : vec4(-1e30));
-        }
+        bool ok;
+        SEPARATE_BLOCK ok = manifold_constraint_blocks(kind, c, x0, y, from_light, es, et, i, res, A, B, Cn);
+        mat2 M = j < 2u ? A : j < 4u ? B : Cn;
+        vec2 analytic = M[j & 1u];
+        // Central differences at h and 2h, Richardson-extrapolated (error O(h^4)): near the
+        // critical angle inside the sphere the O(h^2) term alone reaches 1e-3 at h = 1e-3.
+        vec2 extrapolated = (4.0 * diff[0] - diff[1]) / 3.0;
+        imageStore(outputImage, ivec2(x, 6 * int(i) + int(j)),
+                   !ok ? vec4(1e30) : one_cell ? vec4(analytic, extrapolated) : vec4(-1e30));
     }
 }
