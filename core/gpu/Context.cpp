@@ -990,6 +990,26 @@ void Context::uploadImage(const Image& image, const void* texels) {
     submit(*cmd);
 }
 
+void Context::uploadImageRows(const Image& image, const void* texels, uint32_t firstRow,
+                              uint32_t rows) {
+    if (rows == 0) return;
+    if (size_t(firstRow) + rows > image.height())
+        throw GpuError("uploadImageRows: rows " + std::to_string(firstRow) + ".." +
+                       std::to_string(firstRow + rows - 1) + " outside the image's " +
+                       std::to_string(image.height()));
+    const size_t bytes = image.byteSize() / image.height() * rows;
+    auto staging = createBuffer(bytes, "staging", true);
+    std::memcpy(staging->mapped(), texels, bytes);
+    auto cmd = beginCommands();
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageOffset = {0, int32_t(firstRow), 0};
+    region.imageExtent = {image.width(), rows, 1};
+    vkCmdCopyBufferToImage(cmd->handle(), staging->handle(), image.handle(),
+                           VK_IMAGE_LAYOUT_GENERAL, 1, &region);
+    submit(*cmd);
+}
+
 void Context::downloadImage(const Image& image, void* texels) {
     auto staging = createBuffer(image.byteSize(), "staging", true);
     auto cmd = beginCommands();

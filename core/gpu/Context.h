@@ -240,6 +240,8 @@ public:
     void downloadBuffer(const Buffer& buffer, void* data, size_t bytes, size_t offset = 0);
     // Texels tightly packed in the image's format.
     void uploadImage(const Image& image, const void* texels);
+    // Rows firstRow .. firstRow + rows - 1 only; texels holds those rows, tightly packed.
+    void uploadImageRows(const Image& image, const void* texels, uint32_t firstRow, uint32_t rows);
     void downloadImage(const Image& image, void* texels);
 
     void savePipelineCache();

@@ -75,6 +75,38 @@ std::shared_ptr<gpu::Buffer> upload(gpu::Context& gpu, const std::vector<T>& dat
     return buf;
 }
 
+// Scene records in an RGBA32UI image, texel i at (i % kRecordImageWidth, i / kRecordImageWidth)
+// (shaders/lib/scene.glsl SCENE_TEXEL): lavapipe loads image texels far cheaper than buffer
+// words at divergent addresses (bench/llvmpipe_loads.sh). Records are multiples of 16 bytes.
+constexpr uint32_t kRecordImageWidth = 8192, kRecordImageMaxRows = 16384;
+
+uint32_t recordImageRows(size_t bytes) {
+    const size_t texels = std::max<size_t>((bytes + 15) / 16, 1);
+    return uint32_t((texels + kRecordImageWidth - 1) / kRecordImageWidth);
+}
+
+std::shared_ptr<gpu::Image> recordImage(gpu::Context& gpu, const void* data, size_t bytes,
+                                        const std::string& name) {
+    const uint32_t rows = recordImageRows(bytes);
+    if (rows > kRecordImageMaxRows)
+        throw UserError(
+            fmt::format("scene data '{}' of {} MB exceeds its image ({} rows of {} "
+                        "16-byte texels)",
+                        name, bytes >> 20, kRecordImageMaxRows, kRecordImageWidth));
+    std::vector<glm::uvec4> texels(size_t(rows) * kRecordImageWidth, glm::uvec4(0u));
+    if (bytes) std::memcpy(texels.data(), data, bytes);
+    auto image = gpu.createImage(kRecordImageWidth, rows, gpu::Format::RGBA32UI, name);
+    gpu.uploadImage(*image, texels.data());
+    return image;
+}
+
+template <class T>
+std::shared_ptr<gpu::Image> recordImage(gpu::Context& gpu, const std::vector<T>& data,
+                                        const std::string& name) {
+    static_assert(sizeof(T) % 16 == 0, "scene records are whole 16-byte texels");
+    return recordImage(gpu, data.data(), data.size() * sizeof(T), name);
+}
+
 // World-space vertices of `mesh` under `toWorld` (normals by the inverse transpose).
 void transformVertices(const Mesh& mesh, const glm::mat4& toWorld, VertexGpu* out,
                        glm::vec3* positions) {
@@ -123,8 +155,10 @@ struct MovingShape {
 };
 
 struct SceneGpu::Impl {
-    std::shared_ptr<gpu::Buffer> vertices, triangles, shapes, materials, textures, texels, lights,
-        lightCdf, info, envDistribution;
+    std::shared_ptr<gpu::Image> vertices, triangles, shapes, materials, textures, texels, lights;
+    std::shared_ptr<gpu::Buffer> lightCdf, info, envDistribution;
+    // Moving shapes: the vertex image's texels on the CPU, whose changed rows are uploaded.
+    std::vector<VertexGpu> vertexTexels;
     BvhGpu bvh;
     SceneInfoGpu infoData{};
     std::vector<EnvMapDistribution> envs;
@@ -391,21 +425,22 @@ SceneGpu::SceneGpu(gpu::Context& gpu, Scene sceneIn)
 
     auto& g = *mImpl;
     if (g.moving.empty()) {
-        g.vertices = upload(gpu, vertices, "SceneVertices");
+        g.vertices = recordImage(gpu, vertices, "scene_vertex_texels");
     } else {
         // This frame's and the previous frame's vertices at shutter open, then the same at
         // shutter close (motion blur; copies of the open ones until a frame blurs).
-        std::vector<VertexGpu> blocks;
+        std::vector<VertexGpu>& blocks = g.vertexTexels;
         blocks.reserve(4 * vertices.size());
         for (int b = 0; b < 4; ++b) blocks.insert(blocks.end(), vertices.begin(), vertices.end());
-        g.vertices = upload(gpu, blocks, "SceneVertices");
+        g.vertices = recordImage(gpu, blocks, "scene_vertex_texels");
+        blocks.resize(size_t(g.vertices->height()) * kRecordImageWidth * 16 / sizeof(VertexGpu));
     }
-    g.triangles = upload(gpu, triangles, "SceneTriangles");
-    g.shapes = upload(gpu, shapes, "SceneShapes");
-    g.materials = upload(gpu, materials, "SceneMaterials");
-    g.textures = upload(gpu, textures, "SceneTextures");
-    g.texels = upload(gpu, texels, "SceneTexels");
-    g.lights = upload(gpu, lights, "SceneLights");
+    g.triangles = recordImage(gpu, triangles, "scene_triangle_texels");
+    g.shapes = recordImage(gpu, shapes, "scene_shape_texels");
+    g.materials = recordImage(gpu, materials, "scene_material_texels");
+    g.textures = recordImage(gpu, textures, "scene_texture_texels");
+    g.texels = recordImage(gpu, texels, "scene_texel_texels");
+    g.lights = recordImage(gpu, lights, "scene_light_texels");
     g.lightCdf = upload(gpu, cdf, "SceneLightCdf");
     g.info = gpu.createBuffer(sizeof(SceneInfoGpu), "SceneInfoBuffer");
     g.infoData.counts = glm::uvec4(triangles.size(), shapes.size(), lights.size(), envIndex);
@@ -450,13 +485,13 @@ SceneGpu::~SceneGpu() = default;
 
 void SceneGpu::bind(gpu::Bindings& b) const {
     auto& g = *mImpl;
-    b.set("SceneVertices", g.vertices)
-        .set("SceneTriangles", g.triangles)
-        .set("SceneShapes", g.shapes)
-        .set("SceneMaterials", g.materials)
-        .set("SceneTextures", g.textures)
-        .set("SceneTexels", g.texels)
-        .set("SceneLights", g.lights)
+    b.set("scene_vertex_texels", g.vertices)
+        .set("scene_triangle_texels", g.triangles)
+        .set("scene_shape_texels", g.shapes)
+        .set("scene_material_texels", g.materials)
+        .set("scene_texture_texels", g.textures)
+        .set("scene_texel_texels", g.texels)
+        .set("scene_light_texels", g.lights)
         .set("SceneLightCdf", g.lightCdf)
         .set("SceneInfoBuffer", g.info)
         .set("SceneShapeMotion", g.shapeMotion);
@@ -533,8 +568,14 @@ void SceneGpu::updateShapes(float frameTime, bool firstFrame) {
     const size_t vertexCount = g.cpuVertices.size();
     auto uploadRange = [&](const std::vector<VertexGpu>& from, const MovingShape& m, size_t count,
                            size_t block) {
-        mGpu.uploadBuffer(*g.vertices, from.data() + m.firstVertex, count * sizeof(VertexGpu),
-                          (block * vertexCount + m.firstVertex) * sizeof(VertexGpu));
+        if (count == 0) return;
+        const size_t first = block * vertexCount + m.firstVertex;
+        std::copy_n(from.begin() + long(m.firstVertex), count,
+                    g.vertexTexels.begin() + long(first));
+        constexpr size_t kPerRow = kRecordImageWidth * 16 / sizeof(VertexGpu);
+        const size_t row0 = first / kPerRow, row1 = (first + count - 1) / kPerRow;
+        mGpu.uploadImageRows(*g.vertices, g.vertexTexels.data() + row0 * kPerRow, uint32_t(row0),
+                             uint32_t(row1 - row0 + 1));
     };
     for (size_t i = 0; i < g.moving.size(); ++i) {
         MovingShape& m = g.moving[i];

@@ -45,14 +45,14 @@ vec3 mnee_dr_contribution(ShadingPoint sh, vec3 wo_world, ManifoldLight ml, Copl
     vec3 f = bsdf_eval(sh.mat, shading_to_local(sh, wo_world), wi_local);
     vec3 I;
     if (ml.directional) {
-        I = scene_lights[ml.light].p1.rgb;
+        I = scene_light(ml.light).p1.rgb;
     } else if (ml.point) {
         vec3 w;
         float dist;
-        I = point_light_incident(scene_lights[ml.light], res.M, w, dist) * dist * dist;
+        I = point_light_incident(scene_light(ml.light), res.M, w, dist) * dist * dist;
     } else {
         vec3 wl = normalize(res.M - ml.y);
-        I = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n, -wl) *
+        I = emitted_radiance(scene_triangle(scene_light(ml.light).index).w, ml.n, -wl) *
             abs(dot(ml.n, wl));
     }
     float D = coplanar_focusing(coplanar_triangle(res.prim, q), res.bary, q);

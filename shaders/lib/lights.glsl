@@ -15,7 +15,7 @@ struct LightSample {
     vec3 Li;        // radiance (area/env) or intensity/dist^2 (point/spot/directional)
     float pdf;      // solid angle pdf incl. selection; 0 = failed
     bool is_delta;  // point, spot or directional light (no MIS with BSDF sampling)
-    uint light;     // index into scene_lights
+    uint light;     // index of the light (scene_light)
 };
 
 uint light_count() { return scene_info.counts.z; }
@@ -34,7 +34,7 @@ uint select_light(float u) {
 // Radiance leaving an emissive triangle towards -wi (one-sided: front face only).
 vec3 emitted_radiance(uint shape, vec3 n_light, vec3 wi) {
     if (dot(n_light, -wi) <= 0.0) return vec3(0.0);
-    return scene_shapes[shape].emission.rgb;
+    return scene_shape(shape).emission.rgb;
 }
 
 // Solid-angle pdf of sampling triangle `prim` (already selected) from p, as sample_light does.
@@ -52,16 +52,16 @@ float triangle_light_pdf(vec3 p, uint prim, vec3 p_light, vec3 n_light) {
 
 // pdf (incl. selection) that light sampling from p would produce the emitter hit at (prim, p_light).
 float light_pdf_triangle(vec3 p, uint prim, vec3 p_light, vec3 n_light) {
-    ShapeGpu s = scene_shapes[scene_triangles[prim].w];
+    ShapeGpu s = scene_shape(scene_triangle(prim).w);
     if (s.light_offset == ~0u) return 0.0;
     uint li = s.light_offset + (prim - s.first_triangle);
-    return scene_lights[li].pmf * triangle_light_pdf(p, prim, p_light, n_light);
+    return scene_light(li).pmf * triangle_light_pdf(p, prim, p_light, n_light);
 }
 
 float light_pdf_environment(vec3 wi) {
     uint li = scene_info.counts.w;
     if (li == ~0u) return 0.0;
-    LightGpu l = scene_lights[li];
+    LightGpu l = scene_light(li);
     if (light_is(l.type, LIGHT_CONSTANT)) return l.pmf / (4.0 * PI);
     if (!light_type_present(LIGHT_ENVIRONMENT)) return 0.0;
     return l.pmf * envmap_pdf(l.index, wi);
@@ -71,7 +71,7 @@ float light_pdf_environment(vec3 wi) {
 vec3 environment_radiance(vec3 wi) {
     uint li = scene_info.counts.w;
     if (li == ~0u) return vec3(0.0);
-    LightGpu l = scene_lights[li];
+    LightGpu l = scene_light(li);
     if (light_is(l.type, LIGHT_CONSTANT)) return l.p1.rgb;
     if (!light_type_present(LIGHT_ENVIRONMENT)) return vec3(0.0);
     return l.p1.x * envmap_eval(l.index, wi);
@@ -109,7 +109,7 @@ LightSample sample_light(vec3 p, vec3 u) {
     if (light_count() == 0u) return ls;
     uint li = select_light(u.z);
     ls.light = li;
-    LightGpu l = scene_lights[li];
+    LightGpu l = scene_light(li);
     if (light_is(l.type, LIGHT_TRIANGLE)) {
         vec3 a, b, c;
         triangle_positions(l.index, a, b, c);

@@ -7,7 +7,19 @@
 #include "lib/material.glsl"
 #include "lib/scene.glsl"
 
-layout(std430) readonly buffer SceneMaterials { Material scene_materials[]; };
+layout(rgba32ui) uniform readonly uimage2D scene_material_texels;  // Material: 7 texels
+Material scene_material(uint i) {
+    uint t = 7u * i;
+    Material m;
+    m.diffuse = SCENE_TEXEL_F(scene_material_texels, t);
+    m.specular = SCENE_TEXEL_F(scene_material_texels, t + 1u);
+    m.transmittance = SCENE_TEXEL_F(scene_material_texels, t + 2u);
+    m.cond_eta = SCENE_TEXEL_F(scene_material_texels, t + 3u);
+    m.cond_k = SCENE_TEXEL_F(scene_material_texels, t + 4u);
+    m.info = SCENE_TEXEL(scene_material_texels, t + 5u);
+    m.textures = SCENE_TEXEL(scene_material_texels, t + 6u);
+    return m;
+}
 
 struct ShadingPoint {
     SurfacePoint sp;
@@ -69,10 +81,10 @@ vec3 normal_map_normal(vec3 nt, vec3 n, vec3 t, vec3 b) {
 ShadingPoint shading_point(Hit hit) {
     ShadingPoint s;
     s.sp = surface_point(hit.prim, hit.bary);
-    ShapeGpu shape = scene_shapes[s.sp.shape];
+    ShapeGpu shape = scene_shape(s.sp.shape);
     s.shape_flags = shape.flags;
     s.emission = shape.emission.rgb;
-    s.mat = scene_materials[shape.material];
+    s.mat = scene_material(shape.material);
     uint tex = material_reflectance_texture(s.mat);
     if (tex != MATERIAL_NO_TEXTURE) s.mat.diffuse.rgb = texture_fetch(tex, s.sp.uv).rgb;
     uint spec_tex = material_specular_texture(s.mat);

@@ -32,7 +32,7 @@ void main() {
     SurfacePoint sv = surface_point(prim, vp), sV = surface_point(prim, vm);
     float du = up.x - um.x, dv = vp.y - vm.y;
 
-    uvec4 tri = scene_triangles[prim];
+    uvec4 tri = scene_triangle(prim);
     uint o = 12u * i;
     results[o] = vec4(b, float(prim), pc.h);
     results[o + 1u] = vec4(s.dp_du, 0.0);
@@ -43,7 +43,7 @@ void main() {
     results[o + 6u] = vec4((sv.p - sV.p) / dv, 0.0);
     results[o + 7u] = vec4((su.ns - sU.ns) / du, 0.0);
     results[o + 8u] = vec4((sv.ns - sV.ns) / dv, 0.0);
-    results[o + 9u] = vec4(scene_vertices[tri.x].normal_v.xyz, 0.0);
-    results[o + 10u] = vec4(scene_vertices[tri.y].normal_v.xyz, 0.0);
-    results[o + 11u] = vec4(scene_vertices[tri.z].normal_v.xyz, 0.0);
+    results[o + 9u] = vec4(scene_vertex_record(tri.x).normal_v.xyz, 0.0);
+    results[o + 10u] = vec4(scene_vertex_record(tri.y).normal_v.xyz, 0.0);
+    results[o + 11u] = vec4(scene_vertex_record(tri.z).normal_v.xyz, 0.0);
 }

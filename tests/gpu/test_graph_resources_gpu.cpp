@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "core/graph/Renderer.h"
 #include "core/image/Image.h"
@@ -96,6 +97,33 @@ TEST(GraphResourcesGpu, InPlaceIncrementsChainOnOneBuffer) {
     auto at = [&](const std::string& n) { return std::find(order.begin(), order.end(), n); };
     EXPECT_LT(at("before"), at("inc1"));
     EXPECT_LT(at("inc1"), at("inc2"));
+}
+
+}  // namespace
+
+namespace {
+
+// Context::uploadImageRows (moving shapes update the rows of the scene's vertex image that
+// changed): those rows take the new texels, the others keep theirs; rows past the image throw.
+TEST(GpuContext, UploadImageRowsReplacesOnlyThoseRows) {
+    auto gpu = loom::test::gpuContext();
+    const uint32_t w = 5, h = 4;
+    auto image = gpu->createImage(w, h, loom::gpu::Format::RGBA32UI, "rows");
+    std::vector<uint32_t> texels(size_t(w) * h * 4);
+    for (size_t i = 0; i < texels.size(); ++i) texels[i] = uint32_t(i);
+    gpu->uploadImage(*image, texels.data());
+    std::vector<uint32_t> rows(size_t(w) * 2 * 4);
+    for (size_t i = 0; i < rows.size(); ++i) rows[i] = 100000u + uint32_t(i);
+    gpu->uploadImageRows(*image, rows.data(), 1, 2);
+    std::vector<uint32_t> back(texels.size());
+    gpu->downloadImage(*image, back.data());
+    const size_t row = size_t(w) * 4;
+    for (size_t i = 0; i < back.size(); ++i) {
+        const bool updated = i >= row && i < 3 * row;
+        ASSERT_EQ(back[i], updated ? rows[i - row] : texels[i]) << "word " << i;
+    }
+    EXPECT_THROW(gpu->uploadImageRows(*image, rows.data(), 3, 2), loom::GpuError);
+    EXPECT_EQ(gpu->validationErrors(), 0u);
 }
 
 }  // namespace

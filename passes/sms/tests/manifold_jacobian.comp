@@ -38,7 +38,7 @@ ManifoldVertex vertex_at(uint prim, vec3 p) {
 
 // The normal map's bilinear cell at vertex v (ivec2(-1) without a map).
 ivec2 normal_map_cell(ManifoldVertex v) {
-    uint nmap = material_normal_map(scene_materials[scene_shapes[v.shape].material]);
+    uint nmap = material_normal_map(scene_material(scene_shape(v.shape).material));
     if (nmap == MATERIAL_NO_TEXTURE) return ivec2(-1);
     return texture_cell_at(nmap, surface_point(v.prim, triangle_barycentrics(v.prim, v.p)).uv);
 }

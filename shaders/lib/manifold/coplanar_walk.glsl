@@ -81,7 +81,7 @@ struct CoplanarTriangle {
 // [Q] = (w x e1, w x e2, w x (V0 - P)); only the symmetric part of [N]^T [Q] matters.
 CoplanarTriangle coplanar_triangle(uint prim, CoplanarQuery q) {
     CoplanarTriangle t;
-    uvec4 tri = scene_triangles[prim];
+    uvec4 tri = scene_triangle(prim);
     t.vid = tri.xyz;
     t.prim = prim;
     VertexGpu a = scene_vertex(tri.x), b = scene_vertex(tri.y), c = scene_vertex(tri.z);
@@ -96,7 +96,7 @@ CoplanarTriangle coplanar_triangle(uint prim, CoplanarQuery q) {
     t.n0 = n0;
     t.dn1 = n1 - n0;
     t.dn2 = n2 - n0;
-    Material m = scene_materials[scene_shapes[tri.w].material];
+    Material m = scene_material(scene_shape(tri.w).material);
     t.reflection = material_type(m) == MATERIAL_CONDUCTOR;
     t.eta = material_eta(m);
     mat3 N = mat3(t.dn1, t.dn2, t.n0);

@@ -51,13 +51,13 @@ bool manifold_chain_lobe(Material m, uint bsdf_sample_flags) {
 
 // A light SMS samples (its entry's flags carry the shape's or the light's tags).
 bool manifold_emitter_light(uint light) {
-    return (scene_lights[light].flags & SHAPE_CAUSTIC_EMITTER) != 0u;
+    return (scene_light(light).flags & SHAPE_CAUSTIC_EMITTER) != 0u;
 }
 
 // An environment light (map or constant): SMS chains to it end at infinity in a sampled
 // direction (manifold/sms.glsl).
 bool manifold_light_is_environment(uint light) {
-    uint t = scene_lights[light].type;
+    uint t = scene_light(light).type;
     return light_is(t, LIGHT_ENVIRONMENT) || light_is(t, LIGHT_CONSTANT);
 }
 
@@ -130,7 +130,7 @@ bool manifold_coverage_covers_miss(ManifoldCoverage c) {
 #if defined(MANIFOLD_ENVIRONMENT_CHAINS) && !defined(LOOM_TEST_KEEP_ENVIRONMENT_PATHS)
     // (LOOM_TEST_KEEP_ENVIRONMENT_PATHS: the double counting the SMS tests must detect.)
     uint li = scene_info.counts.w;
-    return li != ~0u && manifold_coverage_covers(c, scene_lights[li].flags);
+    return li != ~0u && manifold_coverage_covers(c, scene_light(li).flags);
 #else
     return false;
 #endif
@@ -151,7 +151,7 @@ bool manifold_coverage_covers_light_sample(ManifoldCoverage c, ShadingPoint sh,
 #ifndef MANIFOLD_ENVIRONMENT_CHAINS
     if (manifold_light_is_environment(light)) return false;
 #endif
-    return manifold_coverage_covers(next, scene_lights[light].flags);
+    return manifold_coverage_covers(next, scene_light(light).flags);
 #else
     return false;
 #endif

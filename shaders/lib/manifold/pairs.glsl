@@ -36,7 +36,7 @@ ManifoldLight manifold_sample_pair_light(uint pair, vec3 u, float pair_pdf) {
         else lo = mid + 1u;
     }
     uint index = manifold_emitter_lights[lo].x;
-    uint light = e.w == ~0u ? index : scene_shapes[e.w].light_offset + index;
+    uint light = e.w == ~0u ? index : scene_shape(e.w).light_offset + index;
     ManifoldLight ml = manifold_light_sample_at(light, u.xy);
     float area = uintBitsToFloat(e.z);
     ml.pdf = area > 0.0 ? pair_pdf / area : pair_pdf;

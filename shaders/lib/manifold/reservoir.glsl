@@ -67,7 +67,7 @@ uint manifold_sample_length(ManifoldSample s) {
 ManifoldLight manifold_sample_light_end(ManifoldSample s) {
     uint li = floatBitsToUint(s.light.z);
     ManifoldLight ml = manifold_light_from(vec3(0.0), 1.0, vec3(0.0), li);
-    LightGpu l = scene_lights[li];
+    LightGpu l = scene_light(li);
     if (l.type == LIGHT_TRIANGLE) {
         vec3 a, b, c;
         triangle_positions(l.index, a, b, c);
@@ -84,7 +84,7 @@ ManifoldLight manifold_sample_light_end(ManifoldSample s) {
 
 // Light-local coordinates of a light point (the inverse of manifold_sample_light_end).
 vec4 manifold_light_coords(uint light, vec3 y) {
-    LightGpu l = scene_lights[light];
+    LightGpu l = scene_light(light);
     vec2 uv = l.type == LIGHT_TRIANGLE ? triangle_barycentrics(l.index, y) : vec2(0.0);
     return vec4(uv, uintBitsToFloat(light), 0.0);
 }

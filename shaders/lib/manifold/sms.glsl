@@ -51,7 +51,7 @@ struct ManifoldLight {
     vec3 n;      // unit normal of an area light, 0 for point lights
     vec3 s, t;   // orthonormal basis of the area light's plane
     float pdf;
-    uint light;  // index into scene_lights
+    uint light;  // index of the light (scene_light)
     bool point;
     bool directional;  // y is the unit direction towards the light
     bool valid;  // false: no light SMS can connect to (untagged, environment)
@@ -70,7 +70,7 @@ ManifoldLight manifold_light_sample_at(uint li, vec2 u) {
     ml.s = vec3(0.0);
     ml.t = vec3(0.0);
     ml.light = li;
-    LightGpu l = scene_lights[li];
+    LightGpu l = scene_light(li);
     if (!manifold_emitter_light(li)) return ml;
     if (l.type == LIGHT_TRIANGLE) {
         vec3 a, b, c;
@@ -116,7 +116,7 @@ ManifoldLight manifold_sample_light(vec3 u) {
     ml.valid = false;
     if (light_count() == 0u) return ml;
     uint li = select_light(u.z);
-    float pmf = scene_lights[li].pmf;
+    float pmf = scene_light(li).pmf;
     if (!(pmf > 0.0)) return ml;
     ml = manifold_light_sample_at(li, u.xy);
     ml.pdf *= pmf;
@@ -132,13 +132,13 @@ ManifoldLight manifold_light_from(vec3 y, float pdf, vec3 n, uint light) {
     ml.n = n;
     ml.light = light;
     ml.directional =
-        scene_lights[light].type == LIGHT_DIRECTIONAL || manifold_light_is_environment(light);
+        scene_light(light).type == LIGHT_DIRECTIONAL || manifold_light_is_environment(light);
     ml.point = dot(n, n) == 0.0 && !ml.directional;
     ml.s = vec3(0.0);
     ml.t = vec3(0.0);
     if (!ml.point && !ml.directional) {
         vec3 a, b, c;
-        triangle_positions(scene_lights[light].index, a, b, c);
+        triangle_positions(scene_light(light).index, a, b, c);
         ml.s = normalize(b - a);
         ml.t = cross(n, ml.s);
     }
@@ -344,7 +344,7 @@ bool manifold_trial_scatter_on(inout ManifoldTrial tr, ManifoldChain c, uint i) 
 bool manifold_trial_begin_walk(inout ManifoldTrial tr) {
     bool caster = false;
     for (uint j = 0u; j < tr.proposal.k; ++j) {
-        bool here = (scene_shapes[tr.proposal.v[j].shape].flags & SHAPE_CAUSTIC_CASTER) != 0u;
+        bool here = (scene_shape(tr.proposal.v[j].shape).flags & SHAPE_CAUSTIC_CASTER) != 0u;
 #ifdef MANIFOLD_TRUST_REGION
         // A chain belongs to the pair of its first caster vertex: seeds aimed at another
         // caster that reach this chain must not count it twice.
@@ -372,9 +372,9 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
     uint i = tr.proposal.k;
     bool seeding = tr.phase == TRIAL_SEED;
     if (seeding) {
-        ShapeGpu shape = scene_shapes[scene_triangles[found ? hit.prim : 0u].w];
+        ShapeGpu shape = scene_shape(scene_triangle(found ? hit.prim : 0u).w);
         bool chain_surface =
-            found && manifold_chain_surface(shape.flags, scene_materials[shape.material]);
+            found && manifold_chain_surface(shape.flags, scene_material(shape.material));
         if (!chain_surface) {
             // The straight line reached y or a blocker (MNEE fails there); the scattered SMS
             // seed left the casters (its chain ends) or never reached one.
@@ -385,7 +385,7 @@ void manifold_trial_advance(inout ManifoldTrial tr, bool found, Hit hit, Manifol
         } else {
             append = true;
         }
-    } else if (!found || scene_triangles[hit.prim].w != tr.chain.v[i].shape) {
+    } else if (!found || scene_triangle(hit.prim).w != tr.chain.v[i].shape) {
         // TRIAL_RETRACE: vertex i of the proposal must be on the accepted chain's shape i.
         manifold_trial_reject(tr, ms);
     } else {
@@ -455,16 +455,16 @@ vec3 manifold_trial_contribution(ManifoldTrial tr, ManifoldSettings ms, ShadingP
         if (ml.point) {
             vec3 w;
             float dist;
-            E = point_light_incident(scene_lights[ml.light], last.p, w, dist) * dist * dist;
+            E = point_light_incident(scene_light(ml.light), last.p, w, dist) * dist * dist;
         } else if (manifold_light_is_environment(ml.light)) {
             E = environment_radiance(tr.y);  // over ml.pdf below: per solid angle
         } else {
-            E = scene_lights[ml.light].p1.rgb;
+            E = scene_light(ml.light).p1.rgb;
         }
         L = E / (max(abs(wi_local.z), 1e-8) * radiance_scale * etendue_scale);
         G = manifold_geometric_term(c, tr.x0, tr.y, false, tr.endpoint_det);
     } else {
-        L = emitted_radiance(scene_triangles[scene_lights[ml.light].index].w, ml.n,
+        L = emitted_radiance(scene_triangle(scene_light(ml.light).index).w, ml.n,
                              normalize(tr.y - last.p));
         G = manifold_geometric_term(c, tr.x0, tr.y, true, tr.endpoint_det);
     }

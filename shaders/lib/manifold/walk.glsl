@@ -110,7 +110,7 @@ void manifold_normal_map(inout ManifoldVertex v, SurfacePoint sp, Material mat, 
 
 ManifoldVertex manifold_vertex(uint prim, vec2 bary) {
     SurfacePoint sp = surface_point(prim, bary);
-    Material m = scene_materials[scene_shapes[sp.shape].material];
+    Material m = scene_material(scene_shape(sp.shape).material);
     ManifoldVertex v;
     v.p = sp.p;
     v.ng = sp.ng;
@@ -163,7 +163,7 @@ void manifold_half_vector_frame(ManifoldVertex v, vec3 n, vec3 dn, out vec3 sh, 
 // included. Smooth vertices keep n (n_macro = n).
 void manifold_rough_offset(inout ManifoldVertex v, vec2 u) {
     v.n_macro = v.n;
-    Material m = scene_materials[scene_shapes[v.shape].material];
+    Material m = scene_material(scene_shape(v.shape).material);
     if (!manifold_material_rough(m)) return;
     float alpha = max(material_alpha(m), MICROFACET_MIN_ALPHA);
     vec3 o = microfacet_sample_normals(material_distribution(m), alpha, u);
@@ -410,7 +410,7 @@ vec3 manifold_chain_throughput(ManifoldChain c, vec3 x0, vec3 y, out float radia
     for (uint i = 0u; i < c.k; ++i) {
         ManifoldVertex v = c.v[i];
         // Material data stays out of the vertex: a walk carries two chains per lane.
-        Material m = scene_materials[scene_shapes[v.shape].material];
+        Material m = scene_material(scene_shape(v.shape).material);
         vec3 wo = normalize(manifold_chain_prev(c, i, x0) - v.p);  // towards the camera side
         vec3 wl = normalize(manifold_chain_next(c, i, y) - v.p);   // towards the light
         float cos_o = dot(wo, v.n);
@@ -444,7 +444,7 @@ float manifold_chain_rough_weight(ManifoldChain c, vec3 x0, vec3 y) {
     float w = 1.0;
     for (uint i = 0u; i < c.k; ++i) {
         ManifoldVertex v = c.v[i];
-        Material m = scene_materials[scene_shapes[v.shape].material];
+        Material m = scene_material(scene_shape(v.shape).material);
         if (!manifold_material_rough(m)) continue;
         vec3 wc = normalize(manifold_chain_prev(c, i, x0) - v.p);
         vec3 wl = normalize(manifold_chain_next(c, i, y) - v.p);

@@ -105,7 +105,7 @@ uint restir_generate(RestirSettings cfg, PrimaryHit ph, uvec4 seed, vec4 film_le
                 ++rays;
                 if (!trace_any(nee.ray.o, nee.ray.d, 0.0, nee.ray.tmax, BVH_MASK_ALL)) {
                     vec3 C = beta * nee.value;
-                    LightGpu l = scene_lights[ls.light];
+                    LightGpu l = scene_light(ls.light);
                     uint kind = l.type == LIGHT_TRIANGLE ? RC_SURFACE
                               : (l.type == LIGHT_POINT || l.type == LIGHT_SPOT) ? RC_POINT : RC_DIRECTION;
                     s.light_pdf = ls.pdf;

@@ -111,7 +111,7 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
     } else if (kind == RC_DIRECTION) {
         rc.dir = s.rc_dir;
         dist = 1e30;
-        LightGpu l = scene_lights[s.rc_id];
+        LightGpu l = scene_light(s.rc_id);
         if (l.type == LIGHT_DIRECTIONAL) {
             rc.G_Le = l.p1.rgb;
         } else {
@@ -120,7 +120,7 @@ bool restir_reconnect_begin(RestirSettings cfg, PathSample s, ShadingPoint sy, v
         }
         ray = shadow_ray_infinite(sy.sp.p, sy.sp.ng, rc.dir);
     } else {
-        LightGpu l = scene_lights[s.rc_id];
+        LightGpu l = scene_light(s.rc_id);
         rc.G_Le = point_light_incident(l, sy.sp.p, rc.dir, dist);
         if (!(dist >= cfg.dist_threshold) && cfg.shift == SHIFT_HYBRID) return false;
         ray = shadow_ray_between(sy.sp.p, sy.sp.ng, l.p0.xyz, vec3(0.0));
