@@ -36,6 +36,11 @@ public:
             .doc("NEE+BSDF with MIS, BSDF sampling only, or light sampling only");
         r.paramEnum("misHeuristic", "power", shaderEnum("MIS_HEURISTIC"))
             .doc("Veach 1997 Sec. 9.2");
+        r.paramEnum("sampler", "independent", {"independent", "sobol"})
+            .doc(
+                "random numbers: independent per draw (hashes), or Owen-scrambled Sobol points "
+                "padded per dimension (Burley 2020; pbrt-v4's PaddedSobolSampler), stratified "
+                "over a pixel's samples");
         r.param("motionBlur", true).doc("sample time over the shutter (camera and moving shapes)");
         r.param("clamp", 0.0).min(0).doc("clamp path radiance (0 = off; biased, previews only)");
         r.paramEnum("schedule", "megakernel", {"megakernel", "wavefront"})
@@ -56,6 +61,7 @@ public:
             for (auto& c : name) c = char(std::toupper(c));
             defines[name] = std::string(ctx.has(port) ? "1" : "0");
         }
+        if (param<std::string>("sampler") == "sobol") defines["RNG_SOBOL"] = std::string("1");
         auto rayCounter = mRayCounter.reset(ctx.gpu(), ctx.cmd());
         gpu::Bindings b;
         scene.bind(b);

@@ -86,6 +86,11 @@ PathSettings pt_path_settings() {
 // shutter time.
 float pt_camera_sample(uvec2 pixel, uint s, inout Rng rng, out vec3 o, out vec3 d,
                        out bool given, out Hit first, out bool first_found) {
+#ifdef RNG_SOBOL
+    // sampler = sobol: sample s of this chunk is the pixel's sample number frame * spp + base
+    // + s of its padded Sobol sequence (lib/rng.glsl), its draws dimension by dimension.
+    rng = rng_sample_init(pixel, pc.frameIndex * pc.samplesPerPixel + pc.sampleBase + s, pc.seed);
+#endif
     vec2 uv = (vec2(pixel) + rng_next2(rng)) / vec2(pc.frameSize);
     vec2 u_lens = rng_next2(rng);
     float shutter = pc.motionBlur != 0u ? rng_next(rng) : 0.0;

@@ -371,6 +371,7 @@ const std::vector<PolygonCase>& polygonCases() {
 struct PixelComparison {
     double maxAbsZ = 0.0, meanZ2 = 0.0;  // over the tested pixels
     double relBias = 0.0, relSe = 0.0;   // of the image mean
+    double relExpectedError = 0.0;       // of the expected image mean (its quadrature), summed
     int pixels = 0;                      // with a z-score (nonzero spread)
     double unreached = 0.0;              // |error| of pixels without spread, over the image
 };
@@ -388,6 +389,7 @@ PixelComparison comparePixels(const std::vector<double>& sum, const std::vector<
         var += v / samples;
         total += expected[i];
         double u = expectedError.empty() ? 0.0 : expectedError[i];
+        c.relExpectedError += u;
         double se = std::sqrt(v / samples + u * u);
         if (v > 0.0) {
             double z = (mean - expected[i]) / se;
@@ -404,6 +406,7 @@ PixelComparison comparePixels(const std::vector<double>& sum, const std::vector<
     c.meanZ2 /= std::max(c.pixels, 1);
     c.relBias = diff / total;
     c.relSe = std::sqrt(var) / total;
+    c.relExpectedError = total > 0.0 ? c.relExpectedError / total : 0.0;
     return c;
 }
 
@@ -439,97 +442,136 @@ FrameStudy renderUntilPrecise(Renderer& r, int channel, const std::vector<double
     }
 }
 
+// A polygon case's expected pixels (rho / pi * mean of E over the footprint; -1: not tested)
+// and their quadrature uncertainty, at kPolygonSize^2 pixels.
+constexpr uint32_t kPolygonSize = 32;
+struct PolygonExpectation {
+    std::vector<double> expected, quadrature;
+};
+PolygonExpectation polygonExpectation(const PolygonCase& pc, const Scene& scene) {
+    constexpr uint32_t kSize = kPolygonSize, kSub = 8;
+    static_assert(kSub % 2 == 0);
+    // Expected radiance per pixel: rho / pi * mean of E over the footprint.
+    std::vector<double> expected(kSize * kSize, 0.0), coarse(kSize * kSize, 0.0);
+    {
+        json g = {
+            {"name", "gbuffer"},
+            {"passes", {{{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
+            {"edges", json::array()},
+            {"outputs", {"gbuf.position", "gbuf.vbuffer"}}};
+        Renderer r(sharedGpu(), RenderGraph::parse(g.dump(), "<test>"), kSize * kSub, kSize * kSub);
+        r.setScene(scene);
+        r.frame();
+        ImageData pos = r.readOutput("gbuf.position"), vb = r.readOutput("gbuf.vbuffer");
+        std::vector<dvec3> poly(pc.polygon.begin(), pc.polygon.end());
+        for (uint32_t y = 0; y < kSize * kSub; ++y)
+            for (uint32_t x = 0; x < kSize * kSub; ++x) {
+                uint32_t i = y * kSize * kSub + x, p = (y / kSub) * kSize + x / kSub;
+                if (pos.pixels[i * 4 + 3] == 0.0f || vb.pixels[i * 4 + 3] != 0.0f) {
+                    expected[p] = -1e30;  // footprint not entirely on the floor
+                    continue;
+                }
+                dvec3 xw(pos.pixels[i * 4], 0.0, pos.pixels[i * 4 + 2]);
+                double L =
+                    kFloorAlbedo / M_PI * polygonIrradiance(xw, {0, 1, 0}, poly, pc.radiance);
+                expected[p] += L / (kSub * kSub);
+                if ((x % 2) && (y % 2)) coarse[p] += L / (kSub * kSub / 4);
+            }
+    }
+    // Skip a one-pixel margin around skipped pixels too: a footprint can cross the floor's
+    // edge or the emitter's silhouette between the quadrature points.
+    std::vector<double> tested = expected;
+    for (int y = 0; y < int(kSize); ++y)
+        for (int x = 0; x < int(kSize); ++x)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int u = x + dx, v = y + dy;
+                    if (u >= 0 && v >= 0 && u < int(kSize) && v < int(kSize) &&
+                        expected[v * kSize + u] < 0.0)
+                        tested[y * kSize + x] = -1.0;
+                }
+    expected = tested;
+    // Quadrature uncertainty: the difference to the rule on every other point (which is of
+    // lower order, so this overestimates it), added to each pixel's standard error.
+    std::vector<double> quadrature(kSize * kSize);
+    for (size_t i = 0; i < quadrature.size(); ++i)
+        quadrature[i] = std::abs(expected[i] - coarse[i]);
+    return {expected, quadrature};
+}
+
+// One strategy and sampler on a polygon case, frames until the image mean's standard error is
+// below 0.075% (4 SE <= 0.3%).
+FrameStudy polygonStudy(const PolygonCase& pc, const Scene& scene, const PolygonExpectation& e,
+                        const std::string& strategy, const std::string& sampler) {
+    int spp = strategy == "bsdf" ? 64 : 16;
+    Renderer r(sharedGpu(),
+               ptGraph({{"strategy", strategy},
+                        {"sampler", sampler},
+                        {"samplesPerPixel", spp},
+                        {"maxBounces", 1},
+                        {"motionBlur", false}}),
+               kPolygonSize, kPolygonSize, 11);
+    r.setScene(scene);
+    FrameStudy study = renderUntilPrecise(r, 1, e.expected, e.quadrature, {32, 4, 1024, 7.5e-4});
+    const PixelComparison& c = study.comparison;
+    std::printf(
+        "%-20s %-4s %-11s %3d frames x %3d spp, %4d px: rel. bias %+.4f%% (se %.4f%%), "
+        "max |z| %.2f, mean z^2 %.3f, unreached %.1e, quadrature %.1e\n",
+        pc.name, strategy.c_str(), sampler.c_str(), study.frames, spp, c.pixels, 100 * c.relBias,
+        100 * c.relSe, c.maxAbsZ, c.meanZ2, c.unreached, c.relExpectedError);
+    return study;
+}
+
 }  // namespace
 
 // Direct light from polygonal emitters against Lambert's formula, pixel by pixel, for each
-// strategy. The expectation of a pixel is the irradiance averaged over its footprint (4 x 4
-// midpoint quadrature on pixel-centre GBuffer positions at 4x the resolution); pixels whose
-// footprint touches the emitter are skipped. Each pixel's estimate is the mean of independent
-// frames, whose spread gives its standard error.
+// strategy, and for MIS with the Sobol sampler too. The expectation of a pixel is the
+// irradiance averaged over its footprint (4 x 4 midpoint quadrature on pixel-centre GBuffer
+// positions at 4x the resolution); pixels whose footprint touches the emitter are skipped. Each
+// pixel's estimate is the mean of frames, whose spread gives its standard error: independent
+// frames, or for the Sobol sampler consecutive blocks of one sequence per pixel, negatively
+// correlated, so that the spread overstates its error (conservative;
+// SobolDimensionReuseIsDetected shows that the test still sees a bias through it).
 TEST(PathTracer, DirectLightMatchesLambertPolygonFormula) {
-    constexpr uint32_t kSize = 32, kSub = 8;
-    static_assert(kSub % 2 == 0);
     for (const PolygonCase& pc : polygonCases()) {
         Scene scene = polygonScene(pc);
-        // Expected radiance per pixel: rho / pi * mean of E over the footprint.
-        std::vector<double> expected(kSize * kSize, 0.0), coarse(kSize * kSize, 0.0);
-        {
-            json g = {{"name", "gbuffer"},
-                      {"passes",
-                       {{{"name", "gbuf"}, {"type", "GBuffer"}, {"params", {{"jitter", false}}}}}},
-                      {"edges", json::array()},
-                      {"outputs", {"gbuf.position", "gbuf.vbuffer"}}};
-            Renderer r(sharedGpu(), RenderGraph::parse(g.dump(), "<test>"), kSize * kSub,
-                       kSize * kSub);
-            r.setScene(scene);
-            r.frame();
-            ImageData pos = r.readOutput("gbuf.position"), vb = r.readOutput("gbuf.vbuffer");
-            std::vector<dvec3> poly(pc.polygon.begin(), pc.polygon.end());
-            for (uint32_t y = 0; y < kSize * kSub; ++y)
-                for (uint32_t x = 0; x < kSize * kSub; ++x) {
-                    uint32_t i = y * kSize * kSub + x, p = (y / kSub) * kSize + x / kSub;
-                    if (pos.pixels[i * 4 + 3] == 0.0f || vb.pixels[i * 4 + 3] != 0.0f) {
-                        expected[p] = -1e30;  // footprint not entirely on the floor
-                        continue;
-                    }
-                    dvec3 xw(pos.pixels[i * 4], 0.0, pos.pixels[i * 4 + 2]);
-                    double L =
-                        kFloorAlbedo / M_PI * polygonIrradiance(xw, {0, 1, 0}, poly, pc.radiance);
-                    expected[p] += L / (kSub * kSub);
-                    if ((x % 2) && (y % 2)) coarse[p] += L / (kSub * kSub / 4);
-                }
-        }
-        // Skip a one-pixel margin around skipped pixels too: a footprint can cross the floor's
-        // edge or the emitter's silhouette between the quadrature points.
-        std::vector<double> tested = expected;
-        for (int y = 0; y < int(kSize); ++y)
-            for (int x = 0; x < int(kSize); ++x)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        int u = x + dx, v = y + dy;
-                        if (u >= 0 && v >= 0 && u < int(kSize) && v < int(kSize) &&
-                            expected[v * kSize + u] < 0.0)
-                            tested[y * kSize + x] = -1.0;
-                    }
-        expected = tested;
-        // Quadrature uncertainty: the difference to the rule on every other point (which is of
-        // lower order, so this overestimates it), added to each pixel's standard error.
-        std::vector<double> quadrature(kSize * kSize);
-        for (size_t i = 0; i < quadrature.size(); ++i)
-            quadrature[i] = std::abs(expected[i] - coarse[i]);
-        for (const char* strategy : {"nee", "mis", "bsdf"}) {
+        PolygonExpectation e = polygonExpectation(pc, scene);
+        for (auto [strategy, sampler] : {std::pair{"nee", "independent"},
+                                         {"mis", "independent"},
+                                         {"bsdf", "independent"},
+                                         {"mis", "sobol"}}) {
             bool bsdf = std::string(strategy) == "bsdf";
             if (bsdf && !pc.bsdfFeasible) continue;
-            int spp = bsdf ? 64 : 16;
-            Renderer r(sharedGpu(),
-                       ptGraph({{"strategy", strategy},
-                                {"samplesPerPixel", spp},
-                                {"maxBounces", 1},
-                                {"motionBlur", false}}),
-                       kSize, kSize, 11);
-            r.setScene(scene);
-            // Frames until the image mean's standard error is below 0.075% (4 SE <= 0.3%).
-            FrameStudy study =
-                renderUntilPrecise(r, 1, expected, quadrature, {32, 4, 1024, 7.5e-4});
-            const PixelComparison& c = study.comparison;
-            int frames = study.frames;
-            std::printf(
-                "%-20s %-4s %3d frames x %3d spp, %4d px: rel. bias %+.4f%% (se %.4f%%), "
-                "max |z| %.2f, mean z^2 %.3f, unreached %.1e\n",
-                pc.name, strategy, frames, spp, c.pixels, 100 * c.relBias, 100 * c.relSe, c.maxAbsZ,
-                c.meanZ2, c.unreached);
-            EXPECT_GT(c.pixels, 200) << pc.name;
-            EXPECT_LT(c.unreached, 1e-4) << pc.name << " " << strategy;
-            EXPECT_LT(c.relSe, 7.5e-4) << pc.name << " " << strategy << ": too noisy to see 0.3%";
-            EXPECT_LT(std::abs(c.relBias), 4.0 * c.relSe) << pc.name << " " << strategy;
-            EXPECT_LT(std::abs(c.relBias), 3e-3) << pc.name << " " << strategy;
+            const PixelComparison c = polygonStudy(pc, scene, e, strategy, sampler).comparison;
+            SCOPED_TRACE(std::string(pc.name) + " " + strategy + " " + sampler);
+            EXPECT_GT(c.pixels, 200);
+            EXPECT_LT(c.unreached, 1e-4);
+            EXPECT_LT(c.relSe, 7.5e-4) << "too noisy to see 0.3%";
+            // Floored at 1e-5, the float arithmetic's share: on the tiny far emitter the Sobol
+            // sampler's image mean reaches a standard error of 1.6e-6 and sits 2e-6 off.
+            EXPECT_LT(std::abs(c.relBias), std::max(4.0 * c.relSe, 1e-5));
+            EXPECT_LT(std::abs(c.relBias), 3e-3);
             // Bonferroni over ~1000 pixels (P ~ 6e-4 under the null), and the mean of z^2, which
             // sees a small bias spread over many pixels (~1 +- 0.045 for 1000 pixels).
-            EXPECT_LT(c.maxAbsZ, 5.0) << pc.name << " " << strategy;
-            EXPECT_LT(c.meanZ2, 1.0 + 5.0 * std::sqrt(2.0 / c.pixels))
-                << pc.name << " " << strategy;
+            EXPECT_LT(c.maxAbsZ, 5.0);
+            EXPECT_LT(c.meanZ2, 1.0 + 5.0 * std::sqrt(2.0 / c.pixels));
         }
     }
+}
+
+// The Sobol sampler's one way to go wrong: two draws of a sample on the same dimension.
+// LOOM_TEST_SOBOL_REUSE_DIMENSION makes every 1D draw repeat the 2D draw before it, so the light
+// choice (u.z) equals the first coordinate of the point on the light (u.x): each of the
+// rectangle's two triangles is sampled on part of itself only. The comparison above must see it.
+TEST(PathTracer, SobolDimensionReuseIsDetected) {
+    const PolygonCase& pc = polygonCases()[0];  // rectangle overhead: two triangles
+    Scene scene = polygonScene(pc);
+    PolygonExpectation e = polygonExpectation(pc, scene);
+    ::setenv("LOOM_SHADER_DEFINES", "LOOM_TEST_SOBOL_REUSE_DIMENSION=1", 1);
+    const PixelComparison c = polygonStudy(pc, scene, e, "nee", "sobol").comparison;
+    ::unsetenv("LOOM_SHADER_DEFINES");
+    EXPECT_GT(std::abs(c.relBias), 4.0 * c.relSe);
+    EXPECT_GT(c.maxAbsZ, 5.0);
 }
 
 // A closed box whose six walls all emit L_e and reflect with albedo rho: every pixel's radiance
@@ -647,9 +689,11 @@ std::vector<bool> directEmitterMask(const Scene& scene) {
 }
 
 StrategyRun renderStrategy(const Scene& scene, const std::vector<bool>& mask, const char* strategy,
-                           int spp, int frames, int maxBounces, uint32_t seed) {
+                           int spp, int frames, int maxBounces, uint32_t seed,
+                           const char* sampler = "independent") {
     Renderer r(sharedGpu(),
                ptGraph({{"strategy", strategy},
+                        {"sampler", sampler},
                         {"samplesPerPixel", spp},
                         {"maxBounces", maxBounces},
                         {"motionBlur", false}}),
@@ -899,6 +943,51 @@ TEST(PathTracer, StrategiesAgreeOnProjectScenes) {
     }
 }
 
+// The Sobol sampler over paths of several bounces (its dimensions run on past the first vertex,
+// Russian roulette from the fifth bounce on): MIS with it against MIS with independent numbers
+// on the Cornell box, 8 x 8 regions and the image. Its frames are blocks of one sequence per
+// pixel, negatively correlated, so their spread overstates its error (conservative); the planted
+// dimension reuse (LOOM_TEST_SOBOL_REUSE_DIMENSION) must fail the same comparison.
+TEST(PathTracer, SobolSamplerAgreesWithIndependentNumbersOnTheCornellBox) {
+    Scene scene = loadScene(std::string(LOOM_SOURCE_DIR) + "/scenes/cornell_box.json");
+    scene.camera.path.clear();
+    std::vector<bool> mask = directEmitterMask(scene);
+    constexpr int kSpp = 64, kBounces = 8;
+    const double perRegion = kStrategySize * kStrategySize / 64.0,
+                 perImage = kStrategySize * kStrategySize;
+    const double rareRegion = rareHitBound(scene, false, kSpp, perRegion),
+                 rareImage = rareHitBound(scene, false, kSpp, perImage);
+    std::vector<double> unmasked8 = unmaskedFraction(mask, 8),
+                        unmasked1 = unmaskedFraction(mask, 1);
+    StrategyRun independent = renderStrategy(scene, mask, "mis", kSpp, 256, kBounces, 3);
+    for (bool planted : {false, true}) {
+        if (planted) ::setenv("LOOM_SHADER_DEFINES", "LOOM_TEST_SOBOL_REUSE_DIMENSION=1", 1);
+        StrategyRun sobol =
+            renderStrategy(scene, mask, "mis", kSpp, planted ? 16 : 128, kBounces, 4, "sobol");
+        ::unsetenv("LOOM_SHADER_DEFINES");
+        Agreement regions = compareRegions(sobol.regions, independent.regions, 4.5, unmasked8,
+                                           rareRegion, rareRegion);
+        Agreement image =
+            compareRegions(sobol.image, independent.image, 4.0, unmasked1, rareImage, rareImage);
+        std::printf(
+            "cornell_box mis sobol%s vs independent: image %+.3f%% (|z| %.2f, detects %.2f%%), "
+            "regions max |z| %.2f (detects %.2f%%, median region %.2f%%)\n",
+            planted ? " (planted dimension reuse)" : "",
+            100 * (sobol.image.mean(0) / independent.image.mean(0) - 1.0), image.maxZ,
+            100 * image.detectable, regions.maxZ, 100 * regions.detectable,
+            100 * regions.medianDetectable);
+        std::fflush(stdout);
+        if (planted) {
+            EXPECT_GT(image.maxZ, 4.0) << "the comparison does not see the planted reuse";
+            continue;
+        }
+        EXPECT_LT(image.maxZ, 4.0);
+        EXPECT_LT(regions.maxZ, 4.5);
+        EXPECT_LT(image.detectable, 0.01) << "too weak";
+        EXPECT_LT(regions.detectable, 0.03) << "too weak";
+    }
+}
+
 // Motion blur of a moving camera equals the average of instantaneous frames at sub-shutter
 // times (16 midpoint times; the quadrature error is far below the noise here).
 TEST(PathTracer, MotionBlurEqualsAverageOfInstants) {
@@ -1109,6 +1198,10 @@ TEST(PathTracer, WavefrontScheduleRendersTheMegakernelsImage) {
          false},
         {"environment and glossy spheres", &glossy, {{"maxBounces", 16}}, false},
         {"moving shapes, motion blur", &moving, {{"samplesPerPixel", 2}}, true},
+        {"sampler sobol, 4 spp in chunks of 3 + 1, 64 bounces",
+         &cornell,
+         {{"sampler", "sobol"}, {"samplesPerPixel", 4}, {"maxBounces", 64}},
+         true},
     };
     const std::vector<std::string> outputs = {"pt.color", "pt.albedo", "pt.direct", "pt.indirect"};
     for (const Case& c : cases) {
