@@ -10,8 +10,10 @@
 # wall time); for Loom also its interactive rate, ms per frame at 1 sample per frame (the first
 # frame left out); and relMSE at SPP samples against a REF_SPP reference of each renderer
 # (variance) and of Cycles (variance plus any difference between the renderers), and the ratio
-# of the two references' means, and Loom's time to Cycles' error. Timings are the minimum over
-# REPS (default 3) interleaved repetitions. Never asserts. Skips when Blender is absent.
+# of the two references' means, and Loom's time to Cycles' error. Loom renders once per
+# PathTracer sampler in SAMPLERS (default "independent sobol"; the reference is independent's).
+# Timings are the minimum over REPS (default 3) interleaved repetitions. Never asserts. Skips
+# when Blender is absent.
 #
 #   bash bench/peer_cycles.sh                      # 128x128, 64 spp, 64 bounces, 2048-spp references
 #   SPP=16 REF_SPP=256 WIDTH=64 HEIGHT=64 bash bench/peer_cycles.sh    # quicker
@@ -24,6 +26,7 @@ command -v blender >/dev/null || { echo "peer_cycles.sh: skipped: Blender is not
 W=${WIDTH:-128} H=${HEIGHT:-128} SPP=${SPP:-64} REF_SPP=${REF_SPP:-2048}
 THREADS=${THREADS:-2} BOUNCES=${BOUNCES:-64} OUT=${OUT:-out/peer_cycles} REPS=${REPS:-3}
 SCENES=${SCENES:-"cornell_grey glossy_env"}
+SAMPLERS=${SAMPLERS:-"independent sobol"}  # PathTracer.sampler values, one Loom row each
 mkdir -p "$OUT"
 export LP_NUM_THREADS=$THREADS WIDTH=$W HEIGHT=$H
 
@@ -32,18 +35,19 @@ cycles() {  # scene spp out.exr seed -> prints render seconds
     "$3" "$THREADS" "$BOUNCES" "$4" >"$3.log" 2>&1 || { echo "Cycles failed: $(tail -3 "$3.log")" >&2; exit 1; }
   sed -n 's/^peer_cycles: render_s=\([0-9.]*\).*/\1/p' "$3.log"
 }
-loom_pt() {  # scene spp out.exr seed -> prints wall seconds of the whole render (spp in one frame)
+loom_pt() {  # scene spp out.exr seed [sampler] -> prints wall seconds of the whole render (spp in one frame)
   local t0 t1
   t0=$(date +%s.%N)
   "$LOOM" render graphs/pt.json --scene "bench/data/peer/$1.json" --width "$W" --height "$H" \
     --frames 1 --seed "$4" --set pt.maxBounces="$BOUNCES" --set pt.samplesPerPixel="$2" \
+    --set pt.sampler="\"${5:-independent}\"" \
     --quiet --out "$3" >"$3.log" 2>&1 || { echo "Loom failed: $(tail -3 "$3.log")" >&2; exit 1; }
   t1=$(date +%s.%N)
   awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.4f", b - a}'
 }
-loom_interactive() {  # scene frames -> prints wall ms per frame at 1 sample per frame
+loom_interactive() {  # scene frames sampler -> prints wall ms per frame at 1 sample per frame
   "$LOOM" render graphs/pt.json --scene "bench/data/peer/$1.json" --width "$W" --height "$H" \
-    --frames "$2" --set pt.maxBounces="$BOUNCES" --set pt.samplesPerPixel=1 \
+    --frames "$2" --set pt.maxBounces="$BOUNCES" --set pt.samplesPerPixel=1 --set pt.sampler="\"$3\"" \
     --timings --quiet --out "$OUT/interactive.exr" >"$OUT/interactive.log" 2>&1 || { echo "Loom failed: $(tail -3 "$OUT/interactive.log")" >&2; exit 1; }
   awk '/^frame \(wall\)/ {print $3}' "$OUT/interactive.log"
 }
@@ -64,26 +68,33 @@ for s in $SCENES; do
   [ -f "$lref" ] || loom_pt "$s" "$REF_SPP" "$lref" 1000 >/dev/null
   # time(SPP) - time(1) removes scene sync, BVH build and kernel setup; the minimum over REPS
   # interleaved repetitions of each.
-  c_ms="" l_ms="" l_int=""
+  declare -A l_ms=() l_int=()
+  c_ms=""
   for ((r = 0; r < REPS; ++r)); do
     t1=$(cycles "$s" 1 "$OUT/cycles_${tag}_1.exr" 1)
     tn=$(cycles "$s" "$SPP" "$OUT/cycles_${tag}_$SPP.exr" 1)
     c_ms=$(min_of "$(per_sample "$t1" "$tn")" "$c_ms")
-    t1=$(loom_pt "$s" 1 "$OUT/loom_${tag}_1.exr" 1)
-    tn=$(loom_pt "$s" "$SPP" "$OUT/loom_${tag}_$SPP.exr" 1)
-    l_ms=$(min_of "$(per_sample "$t1" "$tn")" "$l_ms")
-    l_int=$(min_of "$(loom_interactive "$s" "$SPP")" "$l_int")
+    for smp in $SAMPLERS; do
+      t1=$(loom_pt "$s" 1 "$OUT/loom_${smp}_${tag}_1.exr" 1 "$smp")
+      tn=$(loom_pt "$s" "$SPP" "$OUT/loom_${smp}_${tag}_$SPP.exr" 1 "$smp")
+      l_ms[$smp]=$(min_of "$(per_sample "$t1" "$tn")" "${l_ms[$smp]:-}")
+      l_int[$smp]=$(min_of "$(loom_interactive "$s" "$SPP" "$smp")" "${l_int[$smp]:-}")
+    done
   done
   c_own=$(compare "$OUT/cycles_${tag}_$SPP.exr" "$cref")
-  l_own=$(compare "$OUT/loom_${tag}_$SPP.exr" "$lref")
-  l_cyc=$(compare "$OUT/loom_${tag}_$SPP.exr" "$cref")
   refs=$(compare "$lref" "$cref")
-  eq=$(awk -v lm="$l_ms" -v cm="$c_ms" -v le="${l_own%,*}" -v ce="${c_own%,*}" 'BEGIN {printf "%.2f", lm * le / (cm * ce)}')
   rows+="
-| $s | Cycles | $c_ms | | ${c_own%,*} | ${c_own%,*} | 1 | 1 |
-| $s | Loom (lavapipe) | $l_ms | $l_int | ${l_own%,*} | ${l_cyc%,*} | ${refs#*,} | $eq |"
+| $s | Cycles | $c_ms | | ${c_own%,*} | ${c_own%,*} | 1 | 1 |"
   echo "$s,cycles,$W,$H,$SPP,$c_ms,,${c_own%,*},${c_own%,*},1,1" >>"$csv"
-  echo "$s,loom,$W,$H,$SPP,$l_ms,$l_int,${l_own%,*},${l_cyc%,*},${refs#*,},$eq" >>"$csv"
+  for smp in $SAMPLERS; do
+    img=$OUT/loom_${smp}_${tag}_$SPP.exr
+    l_own=$(compare "$img" "$lref")
+    l_cyc=$(compare "$img" "$cref")
+    eq=$(awk -v lm="${l_ms[$smp]}" -v cm="$c_ms" -v le="${l_own%,*}" -v ce="${c_own%,*}" 'BEGIN {printf "%.2f", lm * le / (cm * ce)}')
+    rows+="
+| $s | Loom (lavapipe), sampler $smp | ${l_ms[$smp]} | ${l_int[$smp]} | ${l_own%,*} | ${l_cyc%,*} | ${refs#*,} | $eq |"
+    echo "$s,loom_$smp,$W,$H,$SPP,${l_ms[$smp]},${l_int[$smp]},${l_own%,*},${l_cyc%,*},${refs#*,},$eq" >>"$csv"
+  done
 done
 echo
 echo "$rows"
