@@ -70,6 +70,9 @@ for s in $SCENES; do
   # interleaved repetitions of each.
   declare -A l_ms=() l_int=()
   c_ms=""
+  for smp in $SAMPLERS; do  # compile each sampler's kernels before timing
+    loom_pt "$s" 1 "$OUT/loom_${smp}_${tag}_warm.exr" 1 "$smp" >/dev/null
+  done
   for ((r = 0; r < REPS; ++r)); do
     t1=$(cycles "$s" 1 "$OUT/cycles_${tag}_1.exr" 1)
     tn=$(cycles "$s" "$SPP" "$OUT/cycles_${tag}_$SPP.exr" 1)
