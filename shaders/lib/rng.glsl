@@ -70,20 +70,31 @@ Rng rng_sample_init(uvec2 pixel, uint sample_index, uint seed) {
     r.state = uvec4(pcg4d(uvec4(pixel, seed, 0x51B01u)).x, sample_index, 0u, 0u);
     return r;
 }
-uint rng_next_uint(inout Rng r) {
-#ifdef LOOM_TEST_SOBOL_REUSE_DIMENSION  // a planted bug (test_path_tracer.cpp): the dimension
-    uint seed = rng_hash2(r.state.x, r.state.w - 1u);  // of the draw before, again
-#else
-    uint seed = rng_hash2(r.state.x, r.state.w++);
-#endif
-    uint i = rng_owen_scramble(r.state.y, seed);  // the shuffle: this dimension's own order
+// Dimension dim of the sample: its scramble seed, and in i the sample index in this
+// dimension's own order (the shuffle).
+uint rng_sobol_dimension(Rng r, uint dim, out uint i) {
+    uint seed = rng_hash2(r.state.x, dim);
+    i = rng_owen_scramble(r.state.y, seed);
+    return seed;
+}
+// Sobol's first dimension (van der Corput) at shuffled index i, scrambled.
+uint rng_sobol_dim0_scrambled(uint i, uint seed) {
     return rng_owen_scramble(bitfieldReverse(i), rng_hash2(seed, 1u));
+}
+uint rng_next_uint(inout Rng r) {
+    uint i;
+#ifdef LOOM_TEST_SOBOL_REUSE_DIMENSION  // a planted bug (test_path_tracer.cpp): the dimension
+    uint seed = rng_sobol_dimension(r, r.state.w - 1u, i);  // of the draw before, again
+#else
+    uint seed = rng_sobol_dimension(r, r.state.w++, i);
+#endif
+    return rng_sobol_dim0_scrambled(i, seed);
 }
 float rng_next(inout Rng r) { return rng_unit(rng_next_uint(r)); }
 vec2 rng_next2(inout Rng r) {
-    uint seed = rng_hash2(r.state.x, r.state.w++);
-    uint i = rng_owen_scramble(r.state.y, seed);
-    return vec2(rng_unit(rng_owen_scramble(bitfieldReverse(i), rng_hash2(seed, 1u))),
+    uint i;
+    uint seed = rng_sobol_dimension(r, r.state.w++, i);
+    return vec2(rng_unit(rng_sobol_dim0_scrambled(i, seed)),
                 rng_unit(rng_owen_scramble(rng_sobol_dim1(i), rng_hash2(seed, 2u))));
 }
 #else
