@@ -325,7 +325,7 @@ std::shared_ptr<const CompiledShader> ShaderCompiler::compile(const std::string&
         program.addShader(&shader);
         if (!program.link(messages) || !program.mapIO())
             throw ShaderCompileError(path + ": link error:\n" + formatLog(program.getInfoLog()));
-        spv::SpvBuildLogger logger;
+        ::spv::SpvBuildLogger logger;
         glslang::SpvOptions options;
         options.disableOptimizer = true;  // the driver optimises; keeps compile time low
         glslang::GlslangToSpv(*program.getIntermediate(EShLangCompute), result->spirv, &logger,

@@ -23,7 +23,13 @@ constexpr uint64_t kBlockBytes = kSlots * kSlotBytes;
 constexpr uint64_t kMaxFrame = 2048;
 constexpr uint64_t kPriorBytes = (kMaxFrame / kBlock) * (kMaxFrame / kBlock) * kBlockBytes;
 
-enum Counter { kWalks, kSolutions, kOverflow, kIterations, kMaxSteps };
+enum PriorCounter {
+    kPriorWalks,
+    kPriorSolutions,
+    kPriorOverflow,
+    kPriorIterations,
+    kPriorMaxSteps
+};
 
 }  // namespace
 
@@ -87,19 +93,19 @@ public:
     void frameCompleted(gpu::Context& gpu) override {
         mCounters.read(gpu);
         for (int i = 0; i < 4; ++i) mTotals[i] += mCounters[i];
-        if (mCounters[kMaxSteps] >= 65535u - 16u && !mWarned) {
+        if (mCounters[kPriorMaxSteps] >= 65535u - 16u && !mWarned) {
             logWarning("ManifoldPrior: a presample ran {} BVH steps, at lavapipe's loop limit",
-                       mCounters[kMaxSteps]);
+                       mCounters[kPriorMaxSteps]);
             mWarned = true;
         }
     }
     void onParamChanged(const std::string&) override { std::fill(mTotals, mTotals + 4, 0.0); }
     std::map<std::string, double> stats() const override {
-        return {{"walks", mTotals[kWalks]},
-                {"solutions", mTotals[kSolutions]},
-                {"overflow", mTotals[kOverflow]},
-                {"iterations", mTotals[kIterations]},
-                {"maxTraversalSteps", double(mCounters[kMaxSteps])}};
+        return {{"walks", mTotals[kPriorWalks]},
+                {"solutions", mTotals[kPriorSolutions]},
+                {"overflow", mTotals[kPriorOverflow]},
+                {"iterations", mTotals[kPriorIterations]},
+                {"maxTraversalSteps", double(mCounters[kPriorMaxSteps])}};
     }
 
 private:
