@@ -53,9 +53,11 @@ ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 
   { echo "fuzz.sh: needs libclang-rt-14-dev (libFuzzer)" >&2; exit 77; }
 if [ ! -f "$build/build.ninja" ]; then
   # -O1 -gline-tables-only: what libFuzzer recommends, and it builds faster than -O2 -g.
+  # A unity build halves the instrumented build's CPU time (382 -> 195 s, 2 cores): the sources
+  # share their headers' parsing. It needs names in anonymous namespaces to differ across files.
   CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DLOOM_FUZZ=ON -DCMAKE_BUILD_TYPE=None \
     -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only" -DCMAKE_C_FLAGS="-O1 -gline-tables-only" \
-    -DLOOM_BUILD_TESTS=OFF -DLOOM_BUILD_BENCH=OFF >/dev/null
+    -DCMAKE_UNITY_BUILD=ON -DLOOM_BUILD_TESTS=OFF -DLOOM_BUILD_BENCH=OFF >/dev/null
 fi
 targets=()
 for h in "${harnesses[@]}"; do targets+=("fuzz_$h"); done
