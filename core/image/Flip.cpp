@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 
 #include "core/util/Error.h"  // UserError
 
@@ -17,7 +18,6 @@ namespace loom {
 namespace {
 
 using Vec3 = std::array<double, 3>;
-constexpr double kPi = 3.14159265358979323846;
 constexpr Vec3 kWhiteD65 = {0.950428545, 1.0, 1.088900371};
 
 double srgbToLinear(double v) {
@@ -78,15 +78,18 @@ struct Kernel {
 // Spatial contrast sensitivity filter (sum of two Gaussians, Sec. 4.1), normalised to sum 1.
 Kernel csfKernel(double a1, double b1, double a2, double b2, double ppd) {
     Kernel k;
-    k.radius = int(std::ceil(3.0 * std::sqrt(0.04 / (2.0 * kPi * kPi)) * ppd));  // widest b: 0.04
+    k.radius = int(std::ceil(3.0 * std::sqrt(0.04 / (2.0 * std::numbers::pi * std::numbers::pi)) *
+                             ppd));  // widest b: 0.04
     int n = 2 * k.radius + 1;
     k.w.resize(size_t(n) * n);
     double sum = 0.0;
     for (int y = -k.radius; y <= k.radius; ++y)
         for (int x = -k.radius; x <= k.radius; ++x) {
             double z = (x * x + y * y) / (ppd * ppd);
-            double v = a1 * std::sqrt(kPi / b1) * std::exp(-kPi * kPi * z / b1) +
-                       a2 * std::sqrt(kPi / b2) * std::exp(-kPi * kPi * z / b2);
+            double v = a1 * std::sqrt(std::numbers::pi / b1) *
+                           std::exp(-std::numbers::pi * std::numbers::pi * z / b1) +
+                       a2 * std::sqrt(std::numbers::pi / b2) *
+                           std::exp(-std::numbers::pi * std::numbers::pi * z / b2);
             k.w[size_t((y + k.radius) * n + x + k.radius)] = v;
             sum += v;
         }

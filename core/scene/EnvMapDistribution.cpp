@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -11,8 +12,6 @@
 namespace loom::scene {
 
 namespace {
-
-constexpr double kPiD = 3.14159265358979323846;
 
 // Normalises f into a density over [0,1] (n equal bins) and its CDF (n + 1 entries). A zero
 // function becomes uniform so a row/map without energy still has a valid (never used) CDF.
@@ -73,10 +72,10 @@ EnvMapDistribution::EnvMapDistribution(const float* rgba, uint32_t width, uint32
     mRadiance.resize(3 * W * H);
     double power = 0.0;  // integral of Y dw
     for (size_t j = 0; j < H; ++j) {
-        const double sinTheta = std::sin(kPiD * (double(j) + 0.5) / double(H));
-        const double texelSolidAngle =
-            2.0 * kPiD / double(W) *
-            (std::cos(kPiD * double(j) / double(H)) - std::cos(kPiD * double(j + 1) / double(H)));
+        const double sinTheta = std::sin(std::numbers::pi * (double(j) + 0.5) / double(H));
+        const double texelSolidAngle = 2.0 * std::numbers::pi / double(W) *
+                                       (std::cos(std::numbers::pi * double(j) / double(H)) -
+                                        std::cos(std::numbers::pi * double(j + 1) / double(H)));
         for (size_t i = 0; i < W; ++i) {
             const float* t = rgba + 4 * (j * W + i);
             for (int c = 0; c < 3; ++c) mRadiance[3 * (j * W + i) + c] = t[c];
@@ -86,7 +85,7 @@ EnvMapDistribution::EnvMapDistribution(const float* rgba, uint32_t width, uint32
             power += lum * texelSolidAngle;
         }
     }
-    mAverageLuminance = power / (4.0 * kPiD);
+    mAverageLuminance = power / (4.0 * std::numbers::pi);
     const size_t margPdf = 0, margCdf = H, condPdf = 2 * H + 1, condCdf = condPdf + H * W;
     mDistribution.assign(condCdf + H * (W + 1), 0.0f);
     // Conditional densities p(u | v) per row, then the marginal p(v) of the row integrals.
@@ -110,18 +109,20 @@ double EnvMapDistribution::pdfUv(glm::dvec2 uv) const {
 
 double EnvMapDistribution::pdfDirection(glm::dvec3 local) const {
     const double sinTheta = std::sqrt(local.x * local.x + local.z * local.z);
-    return sinTheta > 0.0 ? pdfUv(uv(local)) / (2.0 * kPiD * kPiD * sinTheta) : 0.0;
+    return sinTheta > 0.0
+               ? pdfUv(uv(local)) / (2.0 * std::numbers::pi * std::numbers::pi * sinTheta)
+               : 0.0;
 }
 
 glm::dvec3 EnvMapDistribution::direction(glm::dvec2 uv) {
-    const double phi = 2.0 * kPiD * uv.x, theta = kPiD * uv.y;
+    const double phi = 2.0 * std::numbers::pi * uv.x, theta = std::numbers::pi * uv.y;
     return {std::sin(phi) * std::sin(theta), std::cos(theta), -std::cos(phi) * std::sin(theta)};
 }
 
 glm::dvec2 EnvMapDistribution::uv(glm::dvec3 d) {
-    double u = (d.x == 0.0 && d.z == 0.0) ? 0.0 : std::atan2(d.x, -d.z) / (2.0 * kPiD);
+    double u = (d.x == 0.0 && d.z == 0.0) ? 0.0 : std::atan2(d.x, -d.z) / (2.0 * std::numbers::pi);
     if (u < 0.0) u += 1.0;
-    return {u >= 1.0 ? 0.0 : u, std::acos(std::clamp(d.y, -1.0, 1.0)) / kPiD};
+    return {u >= 1.0 ? 0.0 : u, std::acos(std::clamp(d.y, -1.0, 1.0)) / std::numbers::pi};
 }
 
 std::vector<float> packEnvMapData(const std::vector<EnvMapDistribution>& maps) {

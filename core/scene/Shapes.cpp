@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -14,8 +15,6 @@
 namespace loom::scene {
 
 namespace {
-
-constexpr float kPi = 3.14159265358979323846f;
 
 // PCG hash (O'Neill 2014, the "RXS-M-XS" output of one LCG step): a stateless integer hash with
 // good avalanche, used for the deterministic generators and the noise lattice.
@@ -42,7 +41,7 @@ private:
 float gradientNoise(float x, float y) {
     auto grad = [](int ix, int iy, float dx, float dy) {
         uint32_t h = pcgHash(uint32_t(ix) * 73856093u ^ pcgHash(uint32_t(iy) * 19349663u));
-        float angle = float(h) * (2.0f * kPi / 4294967296.0f);
+        float angle = float(h) * (2.0f * std::numbers::pi_v<float> / 4294967296.0f);
         return std::cos(angle) * dx + std::sin(angle) * dy;
     };
     auto fade = [](float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); };
@@ -102,9 +101,9 @@ Mesh makeSphere(uint32_t rings, uint32_t segments) {
     m.name = "sphere";
     // Vertex rows of constant theta (0 = +z pole); the seam column is duplicated for the uvs.
     for (uint32_t i = 0; i <= rings; ++i) {
-        float theta = kPi * float(i) / float(rings);
+        float theta = std::numbers::pi_v<float> * float(i) / float(rings);
         for (uint32_t j = 0; j <= segments; ++j) {
-            float phi = 2.0f * kPi * float(j) / float(segments);
+            float phi = 2.0f * std::numbers::pi_v<float> * float(j) / float(segments);
             glm::vec3 p(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
                         std::cos(theta));
             m.positions.push_back(p);
@@ -131,7 +130,7 @@ Mesh makeDisk(uint32_t segments) {
     m.normals.push_back({0, 0, 1});
     m.uvs.push_back({0, 0});
     for (uint32_t j = 0; j <= segments; ++j) {
-        float phi = 2.0f * kPi * float(j) / float(segments);
+        float phi = 2.0f * std::numbers::pi_v<float> * float(j) / float(segments);
         m.positions.push_back({std::cos(phi), std::sin(phi), 0});
         m.normals.push_back({0, 0, 1});
         m.uvs.push_back({1.0f, float(j) / float(segments)});  // Mitsuba: uv = (r, phi / 2pi)
@@ -146,7 +145,7 @@ Mesh makeCylinder(uint32_t segments) {
     m.name = "cylinder";
     for (float z : {0.0f, 1.0f})
         for (uint32_t j = 0; j <= segments; ++j) {
-            float phi = 2.0f * kPi * float(j) / float(segments);
+            float phi = 2.0f * std::numbers::pi_v<float> * float(j) / float(segments);
             m.positions.push_back({std::cos(phi), std::sin(phi), z});
             m.normals.push_back({std::cos(phi), std::sin(phi), 0});
             m.uvs.push_back({float(j) / float(segments), z});
@@ -186,7 +185,7 @@ Mesh makeGrass(const GrassParams& p) {
     HashRng rng(p.seed);
     for (uint32_t blade = 0; blade < p.blades; ++blade) {
         glm::vec3 root(2.0f * rng.next() - 1.0f, 2.0f * rng.next() - 1.0f, 0.0f);
-        float facing = 2.0f * kPi * rng.next();
+        float facing = 2.0f * std::numbers::pi_v<float> * rng.next();
         float h = p.minHeight + (p.maxHeight - p.minHeight) * rng.next();
         float bend = p.bend * (0.5f + rng.next());
         glm::vec3 side(std::cos(facing), std::sin(facing), 0.0f);  // across the blade
@@ -403,7 +402,7 @@ private:
                 n->kind = HeightFormula::Node::VarT;
                 mUsesTime = true;
             } else if (name == "pi")
-                n->value = kPi;
+                n->value = std::numbers::pi_v<float>;
             else
                 return call(name, start);
             return n;
