@@ -176,14 +176,15 @@ CommandResult runLoom(const std::string& args) {
 // One `loom validate` over every graph (it compiles each graph's kernels, seconds per graph on
 // lavapipe): one "OK <file>" line per graph, in order, and nothing on stderr.
 TEST(LoomCli, ValidateEveryCommittedGraph) {
-    std::string all, expected;
-    for (const auto& f : graphFiles()) all += " '" + f + "'";
+    const auto files = graphFiles();
+    std::string all;
+    for (const auto& f : files) all += " '" + f + "'";
     auto r = runLoom("validate" + all);
     EXPECT_EQ(r.exitCode, 0) << r.err;
     EXPECT_EQ(r.err, "");
     std::istringstream lines(r.out);
     std::string line;
-    for (const auto& f : graphFiles()) {
+    for (const auto& f : files) {
         ASSERT_TRUE(bool(std::getline(lines, line))) << "no line for " << f << "\n" << r.out;
         EXPECT_EQ(line.rfind("OK " + f + " (", 0), 0u) << line;
     }
